@@ -1,0 +1,1 @@
+//! Chi-square goodness-of-fit test of a direction sampler against its pdf.

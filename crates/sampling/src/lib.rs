@@ -1,0 +1,17 @@
+//! Sampling for radia: where random numbers come from ([`Sampler`]), how they become
+//! directions and points ([`warp`], each with its pdf), discrete choices
+//! ([`DiscreteDistribution`]), multiple importance sampling ([`mis`]) and the chi-square
+//! harness that checks every sampling routine against its pdf ([`chi2`]).
+//!
+//! Models never see an RNG: they receive plain sample values in [0, 1), as in pbrt-v4 and
+//! Mitsuba 3, so tests are deterministic and a low-discrepancy sampler can replace the
+//! independent one without touching them.
+
+pub mod chi2;
+mod discrete;
+pub mod mis;
+mod sampler;
+pub mod warp;
+
+pub use discrete::DiscreteDistribution;
+pub use sampler::{IndependentSampler, Sampler};

@@ -1,0 +1,32 @@
+//! Multiple importance sampling weights (Veach 1997, ch. 9).
+
+/// Power heuristic with β = 2 for one sample from each strategy: the weight of the strategy
+/// whose pdf is `pdf_a`. Mitsuba's `mis_weight`; non-finite results become 0 (path.cpp does
+/// the same with `dr::select(dr::isfinite(w), w, 0)`).
+#[inline]
+pub fn power_heuristic(pdf_a: f32, pdf_b: f32) -> f32 {
+    let a2 = pdf_a * pdf_a;
+    let b2 = pdf_b * pdf_b;
+    let w = a2 / (a2 + b2);
+    if w.is_finite() {
+        w
+    } else {
+        0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn weights_sum_to_one_and_stay_finite() {
+        for (a, b) in [(1.0, 1.0), (0.3, 7.0), (1e-20, 1e-20), (1e30, 1.0)] {
+            let s = power_heuristic(a, b) + power_heuristic(b, a);
+            assert!((s - 1.0).abs() < 1e-5, "{a} {b} {s}");
+        }
+        assert_eq!(power_heuristic(0.0, 0.0), 0.0);
+        assert_eq!(power_heuristic(f32::INFINITY, f32::INFINITY), 0.0);
+        assert_eq!(power_heuristic(1.0, 0.0), 1.0);
+    }
+}

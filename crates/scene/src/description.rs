@@ -1,0 +1,125 @@
+//! The typed scene description: what a loader (Mitsuba XML, glTF) produces and
+//! [`crate::Scene::build`] consumes. Plain data in world space; no strings left to compare.
+
+use glam::{Affine3A, Vec2, Vec3};
+use radia_bsdf::Bsdf;
+use radia_math::Spectrum;
+
+/// Mitsuba's `path` integrator parameters (`src/integrators/path.cpp`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct IntegratorDesc {
+    /// Longest path in segments; −1 = unbounded (Mitsuba's default).
+    pub max_depth: i32,
+    /// Depth from which Russian roulette starts (Mitsuba's default 5).
+    pub rr_depth: i32,
+    /// Camera rays see through area emitters and escaped primary rays give 0.
+    pub hide_emitters: bool,
+}
+
+impl Default for IntegratorDesc {
+    fn default() -> Self {
+        Self { max_depth: -1, rr_depth: 5, hide_emitters: false }
+    }
+}
+
+/// Reconstruction filter of the film (`src/rfilters/*.cpp`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FilterDesc {
+    /// Every sample lands in its own pixel with weight 1 (radius 0.5).
+    Box,
+    /// Mitsuba's default: Gaussian of `stddev` pixels truncated at `radius` = 4·stddev and shifted
+    /// to reach zero there.
+    Gaussian { stddev: f32 },
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct FilmDesc {
+    pub width: u32,
+    pub height: u32,
+    pub filter: FilterDesc,
+}
+
+impl Default for FilmDesc {
+    fn default() -> Self {
+        // hdrfilm defaults (src/films/hdrfilm.cpp)
+        Self { width: 768, height: 576, filter: FilterDesc::Gaussian { stddev: 0.5 } }
+    }
+}
+
+/// `perspective` sensor (`src/sensors/perspective.cpp`), with `fov` already converted to the
+/// horizontal axis.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraDesc {
+    /// Camera to world; the camera looks along local +z, local +y is up, local +x is
+    /// image left (Mitsuba's convention: image x runs towards −x).
+    pub to_world: Affine3A,
+    /// Full horizontal field of view in degrees.
+    pub fov_x_degrees: f32,
+    pub near_clip: f32,
+    pub far_clip: f32,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct SamplerDesc {
+    pub sample_count: u32,
+    pub seed: u64,
+}
+
+impl Default for SamplerDesc {
+    fn default() -> Self {
+        Self { sample_count: 4, seed: 0 }
+    }
+}
+
+/// A triangle mesh in world space.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    pub positions: Vec<Vec3>,
+    /// Per-vertex shading normals (unit length), or `None` for flat shading.
+    pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates.
+    pub uvs: Option<Vec<Vec2>>,
+    /// Counter-clockwise triangles: the geometric normal is (p1 − p0) × (p2 − p0).
+    pub indices: Vec<[u32; 3]>,
+    /// Mitsuba's `flip_normals`: the geometric and shading normals are negated.
+    pub flip_normals: bool,
+}
+
+/// The geometry of one shape.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Geometry {
+    Mesh(Mesh),
+    /// Analytic sphere (`src/shapes/sphere.cpp`), outward normals unless flipped.
+    Sphere { center: Vec3, radius: f32, flip_normals: bool },
+    /// Analytic unit disk in the xy-plane, normal +z, mapped by `to_world` (`src/shapes/disk.cpp`).
+    Disk { to_world: Affine3A, flip_normals: bool },
+}
+
+/// A shape with its material and, if it glows, its `area` emitter.
+#[derive(Clone, Debug)]
+pub struct ShapeDesc {
+    pub geometry: Geometry,
+    pub bsdf: Bsdf,
+    /// Radiance of the one-sided `area` emitter attached to the shape.
+    pub emission: Option<Spectrum>,
+    /// Where the shape was declared (for messages): "file:line".
+    pub origin: String,
+}
+
+/// Emitters that are not attached to a shape.
+#[derive(Clone, Debug, PartialEq)]
+pub enum EmitterDesc {
+    /// `constant`: the same radiance from every direction, visible as the background.
+    Constant { radiance: Spectrum },
+}
+
+/// Everything needed to render one image.
+#[derive(Clone, Debug)]
+pub struct SceneDescription {
+    pub integrator: IntegratorDesc,
+    pub camera: CameraDesc,
+    pub film: FilmDesc,
+    pub sampler: SamplerDesc,
+    pub shapes: Vec<ShapeDesc>,
+    pub emitters: Vec<EmitterDesc>,
+}
