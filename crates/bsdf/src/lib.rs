@@ -19,8 +19,10 @@ use radia_math::Spectrum;
 
 mod diffuse;
 mod texture;
+mod twosided;
 
 pub use diffuse::Diffuse;
+pub use twosided::TwoSided;
 pub use texture::Texture;
 
 /// Lobe flags: which kind of scattering a model has, or which lobe a sample came from.
@@ -97,6 +99,7 @@ pub struct BsdfSample {
 #[derive(Clone, Debug)]
 pub enum Bsdf {
     Diffuse(Diffuse),
+    TwoSided(TwoSided),
 }
 
 impl Bsdf {
@@ -105,6 +108,7 @@ impl Bsdf {
     pub fn flags(&self) -> LobeFlags {
         match self {
             Bsdf::Diffuse(_) => LobeFlags::DIFFUSE_REFLECTION,
+            Bsdf::TwoSided(m) => m.flags(),
         }
     }
 
@@ -113,6 +117,7 @@ impl Bsdf {
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
         match self {
             Bsdf::Diffuse(m) => m.eval(sp, wi, wo),
+            Bsdf::TwoSided(m) => m.eval(sp, wi, wo),
         }
     }
 
@@ -121,6 +126,7 @@ impl Bsdf {
     pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
         match self {
             Bsdf::Diffuse(m) => m.pdf(sp, wi, wo),
+            Bsdf::TwoSided(m) => m.pdf(sp, wi, wo),
         }
     }
 
@@ -130,6 +136,7 @@ impl Bsdf {
     pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
         match self {
             Bsdf::Diffuse(m) => m.sample(sp, wi, u1, u2),
+            Bsdf::TwoSided(m) => m.sample(sp, wi, u1, u2),
         }
     }
 
