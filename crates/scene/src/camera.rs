@@ -1,0 +1,51 @@
+//! The perspective camera with Mitsuba's conventions (`src/sensors/perspective.cpp`,
+//! `perspective_projection` in `include/mitsuba/render/sensor.h`).
+
+use crate::description::CameraDesc;
+use glam::{Affine3A, Vec2, Vec3};
+use radia_math::Ray;
+
+#[derive(Clone, Debug)]
+pub struct Camera {
+    to_world: Affine3A,
+    origin: Vec3,
+    /// tan(fov_x / 2).
+    tan_half_x: f32,
+    /// tan(fov_x / 2) / aspect.
+    tan_half_y: f32,
+    near_clip: f32,
+    far_clip: f32,
+}
+
+impl Camera {
+    pub fn new(desc: &CameraDesc, width: u32, height: u32) -> Self {
+        let aspect = width as f32 / height as f32;
+        let tan_half_x = (desc.fov_x_degrees.to_radians() * 0.5).tan();
+        Self {
+            to_world: desc.to_world,
+            origin: desc.to_world.transform_point3(Vec3::ZERO),
+            tan_half_x,
+            tan_half_y: tan_half_x / aspect,
+            near_clip: desc.near_clip,
+            far_clip: desc.far_clip,
+        }
+    }
+
+    /// The ray through `film`, a position on the film in [0, 1]² with x to the right and y
+    /// downwards (row 0 at the top). Local +x points to image *left*, as in Mitsuba; the ray
+    /// starts on the near plane and ends on the far plane.
+    #[inline]
+    pub fn generate_ray(&self, film: Vec2) -> Ray {
+        let local = Vec3::new(
+            (1.0 - 2.0 * film.x) * self.tan_half_x,
+            (1.0 - 2.0 * film.y) * self.tan_half_y,
+            1.0,
+        )
+        .normalize();
+        let inv_z = 1.0 / local.z;
+        let near_t = self.near_clip * inv_z;
+        let far_t = self.far_clip * inv_z;
+        let d = self.to_world.transform_vector3(local).normalize();
+        Ray::new(self.origin + d * near_t, d, far_t - near_t)
+    }
+}
