@@ -1,0 +1,130 @@
+//! The parallel renderer: the image is cut into tiles rendered by rayon; samples are taken in
+//! passes so that an interrupted render keeps every finished pass. Tiles are merged into the
+//! film in a fixed order, so the same seed and sample count give the same image bit for bit
+//! whatever the number of threads.
+
+use crate::film::{Film, Filter, Image};
+use crate::path::{PathIntegrator, PathStats};
+use glam::{UVec2, Vec2};
+use radia_sampling::{IndependentSampler, Sampler};
+use radia_scene::Scene;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+const TILE: u32 = 32;
+/// Samples per pixel in one pass (the granularity at which an interrupted render stops).
+const PASS_SPP: u32 = 16;
+
+#[derive(Clone, Copy, Debug)]
+pub struct RenderOptions {
+    pub spp: u32,
+    pub seed: u64,
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RenderStats {
+    /// Samples per pixel actually rendered (less than asked if interrupted).
+    pub spp: u32,
+    pub rays: u64,
+    pub samples: u64,
+    /// Samples whose radiance came out NaN or infinite; they were dropped.
+    pub invalid_samples: u64,
+}
+
+pub struct RenderOutput {
+    pub image: Image,
+    pub stats: RenderStats,
+}
+
+struct TileResult {
+    film: Film,
+    stats: PathStats,
+    invalid: u64,
+}
+
+/// Renders `scene`. `progress` is called with the number of samples finished so far (from
+/// any thread); when `cancel` becomes true the current pass is abandoned and the image of
+/// the finished passes is returned.
+pub fn render(
+    scene: &Scene,
+    options: &RenderOptions,
+    cancel: &AtomicBool,
+    progress: &(dyn Fn(u64) + Sync),
+) -> RenderOutput {
+    let (w, h) = (scene.film.width, scene.film.height);
+    let filter = Filter::new(scene.film.filter);
+    let margin = (filter.radius() - 0.5).ceil().max(0.0) as i32;
+    let integrator = PathIntegrator::new(scene);
+    let mut film = Film::new(0, 0, w, h, filter);
+    let mut stats = RenderStats::default();
+
+    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
+        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
+        .collect();
+    let done = AtomicU64::new(0);
+
+    let mut spp_start = 0;
+    while spp_start < options.spp {
+        let spp_end = (spp_start + PASS_SPP).min(options.spp);
+        let results: Vec<Option<TileResult>> = tiles
+            .par_iter()
+            .map(|&(x0, y0)| {
+                if cancel.load(Ordering::Relaxed) {
+                    return None;
+                }
+                let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
+                let mut tile = Film::new(
+                    x0 as i32 - margin,
+                    y0 as i32 - margin,
+                    tw + 2 * margin as u32,
+                    th + 2 * margin as u32,
+                    filter,
+                );
+                let mut sampler = IndependentSampler::new(options.seed);
+                let mut pstats = PathStats::default();
+                let mut invalid = 0;
+                for y in y0..y0 + th {
+                    for x in x0..x0 + tw {
+                        for s in spp_start..spp_end {
+                            sampler.start_pixel_sample(UVec2::new(x, y), s);
+                            let pos = Vec2::new(x as f32, y as f32) + sampler.next_2d();
+                            let film_pos = pos / Vec2::new(w as f32, h as f32);
+                            let ray = scene.camera.generate_ray(film_pos);
+                            let l = integrator.li(scene, ray, &mut sampler, &mut pstats);
+                            if l.is_finite() {
+                                tile.add_sample(pos, l);
+                            } else {
+                                invalid += 1;
+                            }
+                        }
+                    }
+                    if cancel.load(Ordering::Relaxed) {
+                        return None;
+                    }
+                }
+                let n = (tw * th * (spp_end - spp_start)) as u64;
+                progress(done.fetch_add(n, Ordering::Relaxed) + n);
+                Some(TileResult {
+                    film: tile,
+                    stats: pstats,
+                    invalid,
+                })
+            })
+            .collect();
+        if results.iter().any(Option::is_none) {
+            break;
+        }
+        for r in results.into_iter().flatten() {
+            film.merge(&r.film);
+            stats.rays += r.stats.rays;
+            stats.invalid_samples += r.invalid;
+        }
+        stats.samples += w as u64 * h as u64 * (spp_end - spp_start) as u64;
+        stats.spp = spp_end;
+        spp_start = spp_end;
+    }
+    RenderOutput {
+        image: film.develop(),
+        stats,
+    }
+}
