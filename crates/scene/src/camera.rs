@@ -49,3 +49,17 @@ impl Camera {
         Ray::new(self.origin + d * near_t, d, far_t - near_t)
     }
 }
+
+/// Mitsuba's `Transform4f::look_at` (`include/mitsuba/core/transform.h`): columns
+/// (left, up', dir, origin) with dir = normalize(target − origin), left = normalize(up × dir),
+/// up' = dir × left. `None` when `up` is parallel to the viewing direction.
+pub fn look_at(origin: Vec3, target: Vec3, up: Vec3) -> Option<Affine3A> {
+    let dir = (target - origin).normalize();
+    let left = up.normalize().cross(dir);
+    if !(left.length_squared() > 1e-12) || !dir.is_finite() {
+        return None;
+    }
+    let left = left.normalize();
+    let new_up = dir.cross(left);
+    Some(Affine3A::from_cols(left.into(), new_up.into(), dir.into(), origin.into()))
+}

@@ -8,7 +8,7 @@ pub mod emitter;
 pub mod shape;
 
 pub use accel::Accel;
-pub use camera::Camera;
+pub use camera::{look_at, Camera};
 pub use description::*;
 pub use emitter::{Emitter, EmitterSample};
 pub use shape::{Shape, SurfaceInteraction};
