@@ -5,12 +5,14 @@ pub mod accel;
 pub mod camera;
 pub mod description;
 pub mod emitter;
+pub mod loader;
 pub mod shape;
 
 pub use accel::Accel;
 pub use camera::{look_at, Camera};
 pub use description::*;
 pub use emitter::{Emitter, EmitterSample};
+pub use loader::{load_mitsuba_xml, LoadError};
 pub use shape::{Shape, SurfaceInteraction};
 
 use glam::Vec3;

@@ -1,0 +1,444 @@
+//! Second stage: plugin nodes become the [`SceneDescription`]. One function per plugin reads
+//! its parameters through [`Props`] with Mitsuba's names, defaults and checks.
+
+use super::bsdfs::build_bsdf;
+use super::props::Props;
+use super::shapes::build_shape;
+use super::transform;
+use super::xml::{Doc, Kind};
+use super::LoadError;
+use crate::{
+    CameraDesc, EmitterDesc, FilmDesc, FilterDesc, IntegratorDesc, SamplerDesc, SceneDescription,
+};
+use glam::{Affine3A, Vec3};
+use radia_bsdf::Bsdf;
+use radia_math::Spectrum;
+use std::collections::HashMap;
+
+/// State shared by the plugin builders.
+pub(crate) struct Builder<'a> {
+    pub doc: &'a Doc,
+    /// Built BSDFs by node, so that a referenced material is built once.
+    pub bsdf_cache: HashMap<usize, Bsdf>,
+    /// Non-fatal notes (Mitsuba's warnings), "file:line:col: message".
+    pub warnings: Vec<String>,
+}
+
+const I32: (i64, i64) = (i32::MIN as i64, i32::MAX as i64);
+const U32: (i64, i64) = (0, u32::MAX as i64);
+
+pub(crate) fn build_scene(doc: &Doc) -> Result<(SceneDescription, Vec<String>), LoadError> {
+    let mut b = Builder {
+        doc,
+        bsdf_cache: HashMap::new(),
+        warnings: Vec::new(),
+    };
+    let mut p = Props::new(doc, 0);
+
+    let mut integrator: Option<IntegratorDesc> = None;
+    let mut sensor: Option<(CameraDesc, FilmDesc, SamplerDesc)> = None;
+    let mut shapes = Vec::new();
+    let mut emitters = Vec::new();
+    let mut sensors_seen = 0;
+
+    for (i, n, kind) in p.objects() {
+        p.take(i);
+        match kind {
+            Kind::Integrator => {
+                if integrator.is_some() {
+                    return Err(p.err_at(
+                        p.prop_pos(i),
+                        "only one integrator can be specified per scene",
+                    ));
+                }
+                integrator = Some(build_integrator(&b, n)?);
+            }
+            Kind::Sensor => {
+                let s = build_sensor(&mut b, n)?;
+                sensors_seen += 1;
+                if sensor.is_none() {
+                    sensor = Some(s);
+                }
+            }
+            Kind::Shape => shapes.push(build_shape(&mut b, n)?),
+            Kind::Emitter => {
+                let e = build_emitter(&b, n)?;
+                if !emitters.is_empty() {
+                    return Err(p.err_at(
+                        p.prop_pos(i),
+                        "only one environment emitter can be specified per scene",
+                    ));
+                }
+                emitters.push(e);
+            }
+            // Definitions for later references; built here so that their errors surface.
+            Kind::Bsdf => {
+                build_bsdf(&mut b, n, 0)?;
+            }
+            Kind::Film => {
+                build_film(&b, n)?;
+            }
+            Kind::Sampler => {
+                build_sampler(&b, n)?;
+            }
+            Kind::RFilter => {
+                build_rfilter(&b, n)?;
+            }
+            Kind::Scene => return Err(p.err_at(p.prop_pos(i), "nested scenes are not supported")),
+        }
+    }
+    p.finish()?;
+
+    let Some((camera, film, sampler)) = sensor else {
+        return Err(LoadError::at(
+            &doc.file,
+            doc.nodes[0].pos,
+            "the scene has no <sensor>",
+        ));
+    };
+    if sensors_seen > 1 {
+        b.warnings.push(format!(
+            "{}: the scene has {sensors_seen} sensors; the first one is used",
+            doc.file.display()
+        ));
+    }
+    let desc = SceneDescription {
+        integrator: integrator.unwrap_or_default(),
+        camera,
+        film,
+        sampler,
+        shapes,
+        emitters,
+    };
+    Ok((desc, b.warnings))
+}
+
+/// `path` (`src/integrators/path.cpp` and `MonteCarloIntegrator` in `src/render/integrator.cpp`).
+fn build_integrator(b: &Builder<'_>, idx: usize) -> Result<IntegratorDesc, LoadError> {
+    let mut p = Props::new(b.doc, idx);
+    if p.node.plugin != "path" {
+        return Err(p.err(format!(
+            "unsupported integrator plugin type \"{}\" (radia supports: path)",
+            p.node.plugin
+        )));
+    }
+    let max_depth = p.int("max_depth", -1, I32.0, I32.1)?;
+    if max_depth < -1 {
+        return Err(p.err_at(
+            p.pos_of("max_depth"),
+            "\"max_depth\" must be set to -1 (infinite) or a value >= 0",
+        ));
+    }
+    let rr_depth = p.int("rr_depth", 5, I32.0, I32.1)?;
+    if rr_depth <= 0 {
+        return Err(p.err_at(
+            p.pos_of("rr_depth"),
+            "\"rr_depth\" must be set to a value greater than zero",
+        ));
+    }
+    let hide_emitters = p.boolean("hide_emitters", false)?;
+    p.finish()?;
+    Ok(IntegratorDesc {
+        max_depth: max_depth as i32,
+        rr_depth: rr_depth as i32,
+        hide_emitters,
+    })
+}
+
+/// Mitsuba's `parse_fov` (`src/render/sensor.cpp`): the horizontal field of view in degrees
+/// from `fov` along `fov_axis`, or from `focal_length` (diagonal of 36x24 mm film).
+pub(crate) fn horizontal_fov(
+    fov: Option<f64>,
+    fov_axis: &str,
+    focal_length: Option<&str>,
+    aspect: f64,
+) -> Result<f64, String> {
+    let (fov, axis) = match (fov, focal_length) {
+        (Some(_), Some(_)) => {
+            return Err(
+                "please specify either a focal length ('focal_length') or a field of view ('fov')"
+                    .into(),
+            )
+        }
+        (Some(f), None) => {
+            let axis = match fov_axis.to_ascii_lowercase().as_str() {
+                "smaller" => if aspect > 1.0 { "y" } else { "x" }.to_string(),
+                "larger" => if aspect > 1.0 { "x" } else { "y" }.to_string(),
+                a => a.to_string(),
+            };
+            (f, axis)
+        }
+        (None, f) => {
+            let f = f.unwrap_or("50mm");
+            let digits = f.strip_suffix("mm").unwrap_or(f);
+            let value = super::xml::parse_float(digits).ok_or_else(|| {
+                format!("could not parse the focal length \"{f}\" (must be of the form <x>mm, where <x> is a positive number)")
+            })?;
+            let fov = 2.0
+                * ((36.0f64 * 36.0 + 24.0 * 24.0).sqrt() / (2.0 * value))
+                    .atan()
+                    .to_degrees();
+            (fov, "diagonal".to_string())
+        }
+    };
+    let result = match axis.as_str() {
+        "x" => fov,
+        "y" => (2.0 * ((0.5 * fov.to_radians()).tan() * aspect).atan()).to_degrees(),
+        "diagonal" => {
+            let diagonal = 2.0 * (0.5 * fov.to_radians()).tan();
+            let width = diagonal / (1.0 + 1.0 / (aspect * aspect)).sqrt();
+            (2.0 * (width * 0.5).atan()).to_degrees()
+        }
+        other => {
+            return Err(format!(
+                "the 'fov_axis' parameter must be set to one of 'smaller', 'larger', 'diagonal', 'x', or 'y' (found '{other}')"
+            ))
+        }
+    };
+    if !(result > 0.0 && result < 180.0) {
+        return Err(format!(
+            "the horizontal field of view must be in the range (0, 180), got {result}"
+        ));
+    }
+    Ok(result)
+}
+
+/// `perspective` (`src/sensors/perspective.cpp`, `ProjectiveCamera` and `Sensor` in
+/// `src/render/sensor.cpp`), with its nested film and sampler.
+fn build_sensor(
+    b: &mut Builder<'_>,
+    idx: usize,
+) -> Result<(CameraDesc, FilmDesc, SamplerDesc), LoadError> {
+    let mut p = Props::new(b.doc, idx);
+    if p.node.plugin != "perspective" {
+        return Err(p.err(format!(
+            "unsupported sensor plugin type \"{}\" (radia supports: perspective)",
+            p.node.plugin
+        )));
+    }
+    let mut film = None;
+    let mut sampler = None;
+    for (i, n, kind) in p.objects() {
+        match kind {
+            Kind::Film => {
+                if film.is_some() {
+                    return Err(
+                        p.err_at(p.prop_pos(i), "only one film can be specified per sensor")
+                    );
+                }
+                p.take(i);
+                film = Some(build_film(b, n)?);
+            }
+            Kind::Sampler => {
+                if sampler.is_some() {
+                    return Err(p.err_at(
+                        p.prop_pos(i),
+                        "only one sampler can be specified per sensor",
+                    ));
+                }
+                p.take(i);
+                sampler = Some(build_sampler(b, n)?);
+            }
+            _ => {}
+        }
+    }
+    let film = film.unwrap_or_default();
+    let sampler = sampler.unwrap_or_default();
+
+    let near_clip = p.float("near_clip", 1e-2)?;
+    let far_clip = p.float("far_clip", 1e4)?;
+    if !(near_clip > 0.0) {
+        return Err(p.err_at(
+            p.pos_of("near_clip"),
+            "the 'near_clip' parameter must be greater than zero",
+        ));
+    }
+    if !(near_clip < far_clip) {
+        return Err(p.err_at(
+            p.pos_of("near_clip"),
+            "the 'near_clip' parameter must be smaller than 'far_clip'",
+        ));
+    }
+
+    let fov = p.float_opt("fov")?;
+    // Mitsuba reads fov_axis only together with fov: alone it is an unused parameter.
+    let fov_axis = if fov.is_some() {
+        p.string_opt("fov_axis")?.unwrap_or("x")
+    } else {
+        "x"
+    };
+    let focal_length = p.string_opt("focal_length")?;
+    let aspect = film.width as f64 / film.height as f64;
+    let fov_pos = if fov.is_some() {
+        p.pos_of("fov")
+    } else {
+        p.pos_of("focal_length")
+    };
+    let fov_x =
+        horizontal_fov(fov, fov_axis, focal_length, aspect).map_err(|e| p.err_at(fov_pos, e))?;
+
+    let to_world = p.transform("to_world")?;
+    if transform::has_scale(&to_world) {
+        return Err(p.err_at(
+            p.pos_of("to_world"),
+            "scale factors in the camera-to-world transformation are not allowed (Mitsuba rejects them too)",
+        ));
+    }
+    p.finish()?;
+
+    let camera = CameraDesc {
+        to_world: Affine3A::from_mat4(to_world.as_mat4()),
+        fov_x_degrees: fov_x as f32,
+        near_clip: near_clip as f32,
+        far_clip: far_clip as f32,
+    };
+    Ok((camera, film, sampler))
+}
+
+/// `hdrfilm` (`src/films/hdrfilm.cpp`, `Film` in `src/render/film.cpp`).
+fn build_film(b: &Builder<'_>, idx: usize) -> Result<FilmDesc, LoadError> {
+    let mut p = Props::new(b.doc, idx);
+    if p.node.plugin != "hdrfilm" {
+        return Err(p.err(format!(
+            "unsupported film plugin type \"{}\" (radia supports: hdrfilm)",
+            p.node.plugin
+        )));
+    }
+    let width = p.int("width", 768, U32.0, U32.1)?;
+    let height = p.int("height", 576, U32.0, U32.1)?;
+    for (name, v) in [("width", width), ("height", height)] {
+        if v == 0 {
+            return Err(p.err_at(
+                p.pos_of(name),
+                format!("the film {name} must be at least 1"),
+            ));
+        }
+    }
+    let choices: [(&str, &str, &[&str]); 3] = [
+        ("file_format", "openexr", &["openexr", "exr", "rgbe", "pfm"]),
+        (
+            "pixel_format",
+            "rgb",
+            &["luminance", "luminance_alpha", "rgb", "rgba", "xyz", "xyza"],
+        ),
+        (
+            "component_format",
+            "float16",
+            &["float16", "float32", "uint32"],
+        ),
+    ];
+    for (name, default, allowed) in choices {
+        let v = p.string_opt(name)?.unwrap_or(default).to_ascii_lowercase();
+        if !allowed.contains(&v.as_str()) {
+            return Err(p.err_at(
+                p.pos_of(name),
+                format!(
+                    "the \"{name}\" parameter must be one of {}; found \"{v}\"",
+                    allowed.join(", ")
+                ),
+            ));
+        }
+    }
+    let mut filter = None;
+    for (i, n, kind) in p.objects() {
+        if kind == Kind::RFilter {
+            if filter.is_some() {
+                return Err(p.err_at(
+                    p.prop_pos(i),
+                    "a film can only have one reconstruction filter",
+                ));
+            }
+            p.take(i);
+            filter = Some(build_rfilter(b, n)?);
+        }
+    }
+    p.finish()?;
+    Ok(FilmDesc {
+        width: width as u32,
+        height: height as u32,
+        filter: filter.unwrap_or(FilterDesc::Gaussian { stddev: 0.5 }),
+    })
+}
+
+/// `box` and `gaussian` (`src/rfilters/`).
+fn build_rfilter(b: &Builder<'_>, idx: usize) -> Result<FilterDesc, LoadError> {
+    let mut p = Props::new(b.doc, idx);
+    let f = match p.node.plugin.as_str() {
+        "box" => FilterDesc::Box,
+        "gaussian" => {
+            let stddev = p.float("stddev", 0.5)?;
+            if !(stddev > 0.0 && stddev.is_finite()) {
+                return Err(p.err_at(
+                    p.pos_of("stddev"),
+                    format!("gaussian: stddev must be positive, got {stddev}"),
+                ));
+            }
+            FilterDesc::Gaussian {
+                stddev: stddev as f32,
+            }
+        }
+        other => {
+            return Err(p.err(format!(
+                "unsupported reconstruction filter type \"{other}\" (radia supports: box, gaussian)"
+            )))
+        }
+    };
+    p.finish()?;
+    Ok(f)
+}
+
+/// `independent` (`src/samplers/independent.cpp`, `Sampler` in `src/render/sampler.cpp`).
+fn build_sampler(b: &Builder<'_>, idx: usize) -> Result<SamplerDesc, LoadError> {
+    let mut p = Props::new(b.doc, idx);
+    if p.node.plugin != "independent" {
+        return Err(p.err(format!(
+            "unsupported sampler plugin type \"{}\" (radia supports: independent)",
+            p.node.plugin
+        )));
+    }
+    let sample_count = p.int("sample_count", 4, U32.0, U32.1)?;
+    if sample_count == 0 {
+        return Err(p.err_at(p.pos_of("sample_count"), "sample_count must be at least 1"));
+    }
+    let seed = p.int("seed", 0, U32.0, U32.1)?;
+    p.finish()?;
+    Ok(SamplerDesc {
+        sample_count: sample_count as u32,
+        seed: seed as u64,
+    })
+}
+
+/// A top-level emitter: `constant` (`src/emitters/constant.cpp`).
+fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<EmitterDesc, LoadError> {
+    let mut p = Props::new(b.doc, idx);
+    match p.node.plugin.as_str() {
+        "constant" => {
+            let radiance = p.color("radiance", 1.0, false)?;
+            p.finish()?;
+            Ok(EmitterDesc::Constant { radiance: radiance.as_vec3() })
+        }
+        "area" => Err(p.err("an area emitter must be nested in the <shape> that emits")),
+        other => Err(p.err(format!(
+            "unsupported emitter plugin type \"{other}\" (radia supports: area inside a shape, constant)"
+        ))),
+    }
+}
+
+/// The `area` emitter of a shape (`src/emitters/area.cpp`): its radiance.
+pub(crate) fn area_emitter(b: &Builder<'_>, idx: usize) -> Result<Spectrum, LoadError> {
+    let mut p = Props::new(b.doc, idx);
+    match p.node.plugin.as_str() {
+        "area" => {
+            let radiance = p.color("radiance", 1.0, false)?;
+            p.finish()?;
+            Ok(Vec3::new(
+                radiance.x as f32,
+                radiance.y as f32,
+                radiance.z as f32,
+            ))
+        }
+        other => Err(p.err(format!(
+            "emitter type \"{other}\" cannot be attached to a shape (only \"area\" can)"
+        ))),
+    }
+}

@@ -1,0 +1,195 @@
+//! Shape plugins (`src/shapes/*.cpp`): `obj`, `ply`, `rectangle`, `cube`, `sphere`, `disk`,
+//! each with `to_world`, `flip_normals`, at most one nested BSDF and one `area` emitter.
+
+use super::bsdfs::{build_bsdf, default_bsdf};
+use super::build::{area_emitter, Builder};
+use super::mesh::{self, MeshStats, RawMesh};
+use super::props::Props;
+use super::xml::Kind;
+use super::{obj, ply, LoadError};
+use crate::{Geometry, ShapeDesc};
+use glam::{DMat3, DMat4, DVec3};
+use std::path::{Path, PathBuf};
+
+pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<ShapeDesc, LoadError> {
+    let mut p = Props::new(b.doc, idx);
+    let origin = format!("{}:{}", b.doc.file.display(), p.node.pos.line);
+
+    // Children: one BSDF, one emitter (Mitsuba's Shape constructor).
+    let mut bsdf = None;
+    let mut emission = None;
+    for (i, n, kind) in p.objects() {
+        match kind {
+            Kind::Bsdf => {
+                if bsdf.is_some() {
+                    return Err(p.err_at(
+                        p.prop_pos(i),
+                        "only a single BSDF child object can be specified per shape",
+                    ));
+                }
+                p.take(i);
+                bsdf = Some(build_bsdf(b, n, 0)?);
+            }
+            Kind::Emitter => {
+                if emission.is_some() {
+                    return Err(p.err_at(
+                        p.prop_pos(i),
+                        "only a single emitter child object can be specified per shape",
+                    ));
+                }
+                p.take(i);
+                emission = Some(area_emitter(b, n)?);
+            }
+            _ => {} // reported by `finish`
+        }
+    }
+
+    let to_world = p.transform("to_world")?;
+    let flip_normals = p.boolean("flip_normals", false)?;
+    let plugin = p.node.plugin.as_str();
+    let geometry = match plugin {
+        "obj" | "ply" => {
+            let face_normals = p.boolean("face_normals", false)?;
+            let flip_tex_coords = p.boolean("flip_tex_coords", plugin == "obj")?;
+            let filename = match p.string_opt("filename")? {
+                Some(f) => f,
+                None => return Err(p.err(format!("<shape type=\"{plugin}\">: the \"filename\" parameter is required"))),
+            };
+            let path = resolve_path(&b.doc.dir, filename);
+            let (file, line, col) = (&b.doc.file, p.node.pos.line, p.node.pos.col);
+            let data = std::fs::read(&path).map_err(|e| {
+                let what = if e.kind() == std::io::ErrorKind::NotFound { "not found".to_string() } else { e.to_string() };
+                LoadError::at(
+                    file,
+                    p.node.pos,
+                    format!("mesh file \"{}\" (filename=\"{filename}\"): {what}", path.display()),
+                )
+            })?;
+            let here = format!("(mesh of the shape at {}:{line}:{col})", file.display());
+            let raw = if plugin == "obj" {
+                let text = String::from_utf8_lossy(&data);
+                obj::parse_obj(&text, flip_tex_coords, face_normals)
+                    .map_err(|e| LoadError::at_line(&path, e.line, format!("{} {here}", e.message)))?
+            } else {
+                ply::parse_ply(&data, flip_tex_coords, face_normals)
+                    .map_err(|e| LoadError::in_file(&path, format!("{e} {here}")))?
+            };
+            let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into());
+            mesh_geometry(b, &p, raw, &to_world, face_normals, flip_normals, &name)?
+        }
+        "rectangle" => {
+            // Flat: no vertex normals whatever face_normals says.
+            let _ = p.boolean("face_normals", false)?;
+            mesh_geometry(b, &p, mesh::rectangle(), &to_world, true, flip_normals, "rectangle")?
+        }
+        "cube" => {
+            let face_normals = p.boolean("face_normals", false)?;
+            mesh_geometry(b, &p, mesh::cube(), &to_world, face_normals, flip_normals, "cube")?
+        }
+        "sphere" => {
+            let center = p.point("center", DVec3::ZERO)?;
+            let radius = p.float("radius", 1.0)?;
+            let m = to_world * DMat4::from_translation(center) * DMat4::from_scale(DVec3::splat(radius));
+            let linear = DMat3::from_mat4(m);
+            let world_center = m.transform_point3(DVec3::ZERO);
+            let world_radius = (linear * DVec3::X).length();
+            if !(world_radius > 0.0) || !world_radius.is_finite() || !world_center.is_finite() {
+                return Err(p.err(format!("sphere: invalid radius {radius} or transform (world radius {world_radius})")));
+            }
+            let (c0, c1, c2) = (linear.x_axis.length(), linear.y_axis.length(), linear.z_axis.length());
+            let uniform = (c0 - c1).abs() <= 1e-6 * c0 && (c0 - c2).abs() <= 1e-6 * c0;
+            let orthogonal = linear.x_axis.dot(linear.y_axis).abs() <= 1e-6 * c0 * c1
+                && linear.x_axis.dot(linear.z_axis).abs() <= 1e-6 * c0 * c2
+                && linear.y_axis.dot(linear.z_axis).abs() <= 1e-6 * c1 * c2;
+            if !uniform || !orthogonal {
+                b.warnings.push(format!(
+                    "{}:{}:{}: sphere: to_world should not contain non-uniform scaling or shearing; using radius {world_radius}",
+                    b.doc.file.display(),
+                    p.node.pos.line,
+                    p.node.pos.col
+                ));
+            }
+            // A mirroring transform (or a negative radius) turns the sphere inside out, as in
+            // Mitsuba (sign of the polar decomposition's stretch).
+            let flip = flip_normals ^ (linear.determinant() < 0.0);
+            Geometry::Sphere { center: world_center.as_vec3(), radius: world_radius as f32, flip_normals: flip }
+        }
+        "disk" => {
+            let det = DMat3::from_mat4(to_world).determinant();
+            if !(det.abs() > 0.0) {
+                return Err(p.err("disk: the to_world transform is singular"));
+            }
+            Geometry::Disk { to_world: glam::Affine3A::from_mat4(to_world.as_mat4()), flip_normals }
+        }
+        "shapegroup" | "instance" => {
+            return Err(p.err(format!("<shape type=\"{plugin}\"> (instancing) is not supported by radia")))
+        }
+        other => {
+            return Err(p.err(format!(
+                "unsupported shape plugin type \"{other}\" (radia supports: obj, ply, rectangle, cube, sphere, disk)"
+            )))
+        }
+    };
+    p.finish()?;
+
+    let is_emitter = emission.is_some();
+    Ok(ShapeDesc {
+        geometry,
+        bsdf: bsdf.unwrap_or_else(|| default_bsdf(is_emitter)),
+        emission,
+        origin,
+    })
+}
+
+/// World-space mesh geometry; repairs are reported as warnings.
+fn mesh_geometry(
+    b: &mut Builder<'_>,
+    p: &Props<'_>,
+    raw: RawMesh,
+    to_world: &DMat4,
+    face_normals: bool,
+    flip_normals: bool,
+    name: &str,
+) -> Result<Geometry, LoadError> {
+    let (m, stats) = mesh::finalize(raw, to_world, face_normals, flip_normals)
+        .map_err(|e| p.err(format!("\"{name}\": {e}")))?;
+    let where_ = format!(
+        "{}:{}:{}",
+        b.doc.file.display(),
+        p.node.pos.line,
+        p.node.pos.col
+    );
+    let MeshStats {
+        degenerate,
+        invalid_normals,
+    } = stats;
+    if degenerate > 0 {
+        b.warnings.push(format!(
+            "{where_}: \"{name}\": dropped {degenerate} degenerate (zero-area) triangle(s)"
+        ));
+    }
+    if invalid_normals > 0 {
+        b.warnings.push(format!(
+            "{where_}: \"{name}\": computed vertex normals ({invalid_normals} invalid vertices)"
+        ));
+    }
+    if m.indices.is_empty() {
+        b.warnings
+            .push(format!("{where_}: \"{name}\": the mesh has no triangles"));
+    }
+    Ok(Geometry::Mesh(m))
+}
+
+/// A mesh filename relative to the scene file's directory (then to the working directory, as
+/// Mitsuba's file resolver falls back to it).
+fn resolve_path(dir: &Path, filename: &str) -> PathBuf {
+    let f = Path::new(filename);
+    if f.is_absolute() {
+        return f.to_path_buf();
+    }
+    let in_dir = dir.join(f);
+    if !in_dir.exists() && f.exists() {
+        return f.to_path_buf();
+    }
+    in_dir
+}
