@@ -15,6 +15,8 @@ pub struct DiscreteSample {
     pub index: usize,
     pub pmf: f32,
     /// The sample value rescaled to [0, 1) for reuse (one dimension serves two choices).
+    /// It has about 24 − log2(n) random bits with 24-bit sample values: with a million
+    /// entries, only 16 distinct values. Draw a fresh dimension where that matters.
     pub u_remapped: f32,
 }
 
@@ -75,25 +77,42 @@ impl DiscreteDistribution {
     }
 
     /// Draws an index for `u` in [0, 1).
+    ///
+    /// The bucket and the coin flip inside it both come from `u`, so with n buckets the flip
+    /// and `u_remapped` get about 24 − log2(n) bits of the f32 sample value. The arithmetic is
+    /// done in f64, where `u · n` and its fractional part are exact: in f32 the product rounds
+    /// (up to n itself for u close to 1, giving a fraction of 1 and, in a bucket that keeps
+    /// its own index with probability 1, the NaN of 0 / 0) and the fraction loses further bits.
     #[inline]
     pub fn sample(&self, u: f32) -> DiscreteSample {
+        const ONE_MINUS_EPS: f64 = 1.0 - f64::EPSILON / 2.0;
         let n = self.buckets.len();
-        let scaled = u * n as f32;
+        let scaled = u.max(0.0) as f64 * n as f64;
         let bucket = (scaled as usize).min(n - 1);
-        let frac = (scaled - bucket as f32).clamp(0.0, 1.0);
+        let frac = (scaled - bucket as f64).min(ONE_MINUS_EPS);
         let (keep, alias) = self.buckets[bucket];
+        let keep = keep as f64;
         let (index, u_remapped) = if frac < keep {
             (bucket, frac / keep)
         } else {
-            (alias as usize, ((frac - keep) / (1.0 - keep)).min(1.0 - f32::EPSILON / 2.0))
+            // keep < 1 here, since frac < 1.
+            (alias as usize, (frac - keep) / (1.0 - keep))
         };
-        DiscreteSample { index, pmf: self.pmf[index], u_remapped: u_remapped.clamp(0.0, 1.0 - f32::EPSILON / 2.0) }
+        // The f32 rounding of a value just below 1 can be 1.
+        let u_remapped = (u_remapped as f32).min(1.0 - f32::EPSILON / 2.0);
+        DiscreteSample {
+            index,
+            pmf: self.pmf[index],
+            u_remapped,
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::chi2::{chi2_test_2d, chi2_test_discrete, Chi2Config2d};
+    use glam::Vec2;
 
     #[test]
     fn rejects_bad_weights() {
@@ -120,5 +139,99 @@ mod tests {
             let expect = w[i] / total;
             assert!((c as f32 / n as f32 - expect).abs() < 1e-3, "index {i}");
         }
+    }
+
+    #[test]
+    fn chi2_indices() {
+        // Zeros, a wide dynamic range and a size that is not a power of two.
+        let mut w: Vec<f32> = (0..37)
+            .map(|i| ((i * 7919) % 23) as f32 * 0.37 + 0.01)
+            .collect();
+        w[3] = 0.0;
+        w[20] = 0.0;
+        w[5] = 40.0;
+        w[11] = 1e-3;
+        let d = DiscreteDistribution::new(&w).unwrap();
+        let r = chi2_test_discrete(
+            w.len(),
+            1_000_000,
+            11,
+            crate::test_alpha(),
+            |u, _| Some(d.sample(u).index),
+            |i| d.pmf(i) as f64,
+        );
+        r.assert_passed();
+        assert!((r.integral_of_pdf - 1.0).abs() < 1e-5);
+        assert_eq!(r.observed[3] + r.observed[20], 0.0);
+    }
+
+    /// The index and the remapped sample value are independent, the latter uniform: the joint
+    /// density of (index + ½, u_remapped) over [0, n] × [0, 1] is pmf(⌊x⌋).
+    #[test]
+    fn chi2_remapped_value_is_uniform_and_independent() {
+        let w = [2.0, 0.0, 0.3, 5.0, 1.0, 0.05, 1.7];
+        let d = DiscreteDistribution::new(&w).unwrap();
+        let n = w.len();
+        let cfg = Chi2Config2d {
+            x_res: n,
+            y_res: 25,
+            alpha: crate::test_alpha(),
+            ..Chi2Config2d::new(Vec2::ZERO, Vec2::new(n as f32, 1.0))
+        };
+        let r = chi2_test_2d(
+            &cfg,
+            |u, _| {
+                let s = d.sample(u.x);
+                Some(Vec2::new(s.index as f32 + 0.5, s.u_remapped))
+            },
+            |p| d.pmf((p.x as usize).min(n - 1)) as f64,
+        );
+        r.assert_passed();
+    }
+
+    #[test]
+    fn extreme_sample_values() {
+        let last = 1.0 - f32::EPSILON / 2.0;
+        for w in [
+            &[1.0, 0.0][..],
+            &[0.0, 1.0],
+            &[1.0, 1.0, 1.0],
+            &[3.0, 0.0, 1.0, 0.0, 0.0],
+            &[0.2, 0.5, 0.0],
+        ] {
+            let d = DiscreteDistribution::new(w).unwrap();
+            let n = w.len() as f32;
+            // u = 0, the largest value below 1, and the values around every bucket boundary.
+            let mut us = vec![0.0, last];
+            for b in 1..w.len() {
+                let edge = b as f32 / n;
+                us.extend([
+                    edge,
+                    f32::from_bits(edge.to_bits() - 1),
+                    f32::from_bits(edge.to_bits() + 1),
+                ]);
+            }
+            for u in us {
+                let s = d.sample(u);
+                assert!(
+                    w[s.index] > 0.0,
+                    "{w:?}: u = {u} picked index {} of weight 0",
+                    s.index
+                );
+                assert!(
+                    (0.0..1.0).contains(&s.u_remapped),
+                    "{w:?}: u = {u} remapped to {}",
+                    s.u_remapped
+                );
+            }
+        }
+        // In f32, 3 · (1 − 2⁻²⁴) rounds to 3: the fraction must still stay below 1 and the
+        // remapped value near the end of the last bucket.
+        let d = DiscreteDistribution::new(&[1.0, 1.0, 1.0]).unwrap();
+        let s = d.sample(last);
+        assert_eq!(s.index, 2);
+        assert!(s.u_remapped > 0.999 && s.u_remapped < 1.0);
+        let s = d.sample(0.0);
+        assert_eq!((s.index, s.u_remapped), (0, 0.0));
     }
 }

@@ -28,7 +28,10 @@ pub struct IndependentSampler {
 
 impl IndependentSampler {
     pub fn new(seed: u64) -> Self {
-        Self { seed, rng: Pcg32::seed_from_u64(seed) }
+        Self {
+            seed,
+            rng: Pcg32::seed_from_u64(seed),
+        }
     }
 }
 

@@ -78,7 +78,10 @@ pub fn uniform_sphere_pdf() -> f32 {
 pub fn square_to_uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
     let one_minus_cos_max = 1.0 - cos_max;
     let one_minus_cos = u.x * one_minus_cos_max;
-    let cos_theta = 1.0 - one_minus_cos;
+    // 1 − (1 − cos_max) need not round back to cos_max; for u.x < 1 the rounding of the
+    // product happens to keep cos θ ≥ cos_max, the clamp makes sure a sampled direction always
+    // passes the test of `uniform_cone_pdf` (as `cone_samples_have_positive_pdf` checks).
+    let cos_theta = (1.0 - one_minus_cos).max(cos_max);
     // sin² θ = (1 − cos θ)(1 + cos θ)
     let sin_theta = safe_sqrt(one_minus_cos * (2.0 - one_minus_cos));
     let (s, c) = (2.0 * PI * u.y).sin_cos();
@@ -107,4 +110,338 @@ pub fn square_to_uniform_triangle(u: Vec2) -> Vec2 {
 pub fn uniform_triangle_to_square(b: Vec2) -> Vec2 {
     let t = 1.0 - b.x;
     Vec2::new(1.0 - t * t, if t > 0.0 { b.y / t } else { 0.0 })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::chi2::{chi2_test, chi2_test_2d, Chi2Config, Chi2Config2d, Chi2Result};
+
+    fn sphere_cfg() -> Chi2Config {
+        Chi2Config {
+            alpha: crate::test_alpha(),
+            ..Default::default()
+        }
+    }
+
+    /// A test of a sampler that never fails and whose pdf is normalized.
+    #[track_caller]
+    fn assert_normalized_pass(r: &Chi2Result) {
+        println!("{}", r.report);
+        r.assert_passed();
+        assert_eq!(r.sampled_fraction, 1.0, "{}", r.report);
+        assert!(
+            (r.integral_of_pdf - 1.0).abs() < 1e-3,
+            "∫pdf = {}\n{}",
+            r.integral_of_pdf,
+            r.report
+        );
+    }
+
+    #[test]
+    fn chi2_cosine_hemisphere() {
+        let r = chi2_test(
+            &sphere_cfg(),
+            |u, _| Some(square_to_cosine_hemisphere(u)),
+            |d| cosine_hemisphere_pdf(d) as f64,
+        );
+        assert_normalized_pass(&r);
+    }
+
+    #[test]
+    fn chi2_uniform_hemisphere() {
+        let r = chi2_test(
+            &sphere_cfg(),
+            |u, _| Some(square_to_uniform_hemisphere(u)),
+            |d| uniform_hemisphere_pdf(d) as f64,
+        );
+        assert_normalized_pass(&r);
+    }
+
+    #[test]
+    fn chi2_uniform_sphere() {
+        let r = chi2_test(
+            &sphere_cfg(),
+            |u, _| Some(square_to_uniform_sphere(u)),
+            |_| uniform_sphere_pdf() as f64,
+        );
+        assert_normalized_pass(&r);
+    }
+
+    #[test]
+    fn chi2_uniform_cone() {
+        for cos_max in [0.9f32, 0.2, -0.5] {
+            let r = chi2_test(
+                &sphere_cfg(),
+                |u, _| Some(square_to_uniform_cone(u, cos_max)),
+                |d| uniform_cone_pdf(d, cos_max) as f64,
+            );
+            assert_normalized_pass(&r);
+        }
+    }
+
+    /// A cone of 0.8° half-angle: on the whole sphere it would fill part of one row, so the
+    /// grid zooms on a cap slightly wider than the cone (the edge falls inside a row).
+    #[test]
+    fn chi2_tiny_uniform_cone() {
+        let cos_max = 0.9999f32;
+        let cfg = Chi2Config {
+            cos_theta_min: 1.0 - 1.4 * (1.0 - cos_max as f64),
+            ..sphere_cfg()
+        };
+        let r = chi2_test(
+            &cfg,
+            |u, _| Some(square_to_uniform_cone(u, cos_max)),
+            |d| uniform_cone_pdf(d, cos_max) as f64,
+        );
+        assert_normalized_pass(&r);
+        // Nothing leaked below the cap: the cone fills the inner 1/1.4 of it.
+        let rows = cfg.theta_res;
+        let last_row = &r.observed[(rows - 1) * cfg.phi_res..];
+        assert!(last_row.iter().all(|&c| c == 0.0));
+    }
+
+    #[test]
+    fn cone_samples_have_positive_pdf() {
+        let last = 1.0 - f32::EPSILON / 2.0;
+        for i in 0..=2000 {
+            let cos_max = -0.999 + 1.998 * i as f32 / 2000.0;
+            for cos_max in [cos_max, 1.0 - (1.0 - cos_max) * 1e-4] {
+                for ux in [0.0, 0.5, 0.999_999, last] {
+                    let d = square_to_uniform_cone(Vec2::new(ux, 0.3), cos_max);
+                    assert!(
+                        uniform_cone_pdf(d, cos_max) > 0.0,
+                        "cos_max {cos_max}, u.x {ux}: {d}"
+                    );
+                    assert!((d.length() - 1.0).abs() < 1e-5);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn chi2_uniform_disk_concentric() {
+        let cfg = Chi2Config2d {
+            alpha: crate::test_alpha(),
+            ..Chi2Config2d::new(Vec2::splat(-1.0), Vec2::ONE)
+        };
+        let r = chi2_test_2d(
+            &cfg,
+            |u, _| Some(square_to_uniform_disk_concentric(u)),
+            |p| {
+                if p.length_squared() <= 1.0 {
+                    uniform_disk_pdf() as f64
+                } else {
+                    0.0
+                }
+            },
+        );
+        assert_normalized_pass(&r);
+    }
+
+    /// Barycentrics (b1, b2) are uniform over the triangle b1, b2 ≥ 0, b1 + b2 ≤ 1 of area 1/2.
+    fn triangle_pdf(b: Vec2) -> f64 {
+        if b.x >= 0.0 && b.y >= 0.0 && b.x + b.y <= 1.0 {
+            2.0
+        } else {
+            0.0
+        }
+    }
+
+    fn unit_square_cfg() -> Chi2Config2d {
+        Chi2Config2d {
+            alpha: crate::test_alpha(),
+            ..Chi2Config2d::new(Vec2::ZERO, Vec2::ONE)
+        }
+    }
+
+    #[test]
+    fn chi2_uniform_triangle() {
+        let r = chi2_test_2d(
+            &unit_square_cfg(),
+            |u, _| Some(square_to_uniform_triangle(u)),
+            triangle_pdf,
+        );
+        assert_normalized_pass(&r);
+    }
+
+    #[test]
+    fn uniform_triangle_values_and_inverse() {
+        let cases = [
+            ((0.0, 0.0), (0.0, 0.0)),
+            ((0.0, 0.1), (0.0, 0.1)),
+            ((0.0, 1.0), (0.0, 1.0)),
+            ((1.0, 0.0), (1.0, 0.0)),
+            ((1.0, 0.5), (1.0, 0.0)),
+            ((0.75, 0.5), (0.5, 0.25)),
+        ];
+        for ((ux, uy), (bx, by)) in cases {
+            let b = square_to_uniform_triangle(Vec2::new(ux, uy));
+            assert!(
+                (b - Vec2::new(bx, by)).abs().max_element() < 1e-6,
+                "{ux} {uy} -> {b}"
+            );
+        }
+        let n = 64;
+        for i in 0..n {
+            for j in 0..=n {
+                let u = Vec2::new((i as f32 + 0.5) / n as f32, j as f32 / n as f32);
+                let b = square_to_uniform_triangle(u);
+                assert!(b.x >= 0.0 && b.y >= 0.0 && b.x + b.y <= 1.0 + 1e-6);
+                let back = uniform_triangle_to_square(b);
+                assert!(
+                    (back - u).abs().max_element() < 2e-5,
+                    "{u} -> {b} -> {back}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn warp_special_values() {
+        assert_eq!(
+            square_to_uniform_disk_concentric(Vec2::splat(0.5)),
+            Vec2::ZERO
+        );
+        assert!((square_to_cosine_hemisphere(Vec2::splat(0.5)) - Vec3::Z).length() < 1e-6);
+        assert!((square_to_uniform_sphere(Vec2::new(0.3, 0.0)) - Vec3::Z).length() < 1e-6);
+        assert!((square_to_uniform_cone(Vec2::new(0.0, 0.7), 0.3) - Vec3::Z).length() < 1e-6);
+        for u in [
+            Vec2::ZERO,
+            Vec2::new(0.999_999, 0.0),
+            Vec2::new(0.0, 0.999_999),
+            Vec2::splat(0.999_999),
+        ] {
+            assert!(square_to_uniform_disk_concentric(u).length() <= 1.0 + 1e-6);
+            for d in [
+                square_to_cosine_hemisphere(u),
+                square_to_uniform_hemisphere(u),
+                square_to_uniform_sphere(u),
+            ] {
+                assert!(
+                    (d.length() - 1.0).abs() < 1e-5 && d.is_finite(),
+                    "{u} -> {d}"
+                );
+            }
+        }
+    }
+
+    // ----- the harness has teeth: wrong pdfs are rejected -----
+
+    #[track_caller]
+    fn assert_rejected(r: &Chi2Result) {
+        println!(
+            "{}",
+            r.report.lines().take(8).collect::<Vec<_>>().join("\n")
+        );
+        assert!(!r.passed, "a wrong pdf was accepted:\n{}", r.report);
+        assert!(r.report.contains("REJECTED"));
+    }
+
+    #[test]
+    fn chi2_rejects_cosine_samples_against_uniform_pdf() {
+        let r = chi2_test(
+            &sphere_cfg(),
+            |u, _| Some(square_to_cosine_hemisphere(u)),
+            |d| uniform_hemisphere_pdf(d) as f64,
+        );
+        assert_rejected(&r);
+        assert!(r.p_value < 1e-12, "{}", r.report);
+        // The failure report carries the tables.
+        assert!(r.report.contains("residual map") && r.report.contains("expected counts"));
+    }
+
+    #[test]
+    fn chi2_rejects_slightly_wrong_exponent() {
+        // cos^1.1 θ, normalized: (n + 1) / 2π cos^n θ.
+        let n = 1.1f64;
+        let r = chi2_test(
+            &sphere_cfg(),
+            |u, _| Some(square_to_cosine_hemisphere(u)),
+            |d| {
+                if d.z > 0.0 {
+                    (n + 1.0) / std::f64::consts::TAU * (d.z as f64).powf(n)
+                } else {
+                    0.0
+                }
+            },
+        );
+        assert!((r.integral_of_pdf - 1.0).abs() < 1e-3);
+        assert_rejected(&r);
+    }
+
+    #[test]
+    fn chi2_rejects_wrong_normalization_and_support() {
+        // 5% too much density.
+        let r = chi2_test(
+            &sphere_cfg(),
+            |u, _| Some(square_to_uniform_sphere(u)),
+            |_| 1.05 * uniform_sphere_pdf() as f64,
+        );
+        assert_rejected(&r);
+        // 5% too little: the pdf expects lost samples that never happen.
+        let r = chi2_test(
+            &sphere_cfg(),
+            |u, _| Some(square_to_uniform_sphere(u)),
+            |_| 0.95 * uniform_sphere_pdf() as f64,
+        );
+        assert_rejected(&r);
+        // Samples where the pdf is zero.
+        let r = chi2_test(
+            &sphere_cfg(),
+            |u, _| Some(square_to_uniform_sphere(u)),
+            |d| {
+                2.0 * uniform_hemisphere_pdf(d) as f64
+                    * uniform_sphere_pdf() as f64
+                    * std::f64::consts::TAU
+            },
+        );
+        assert_rejected(&r);
+        assert!(r.report.contains("integrates to zero"), "{}", r.report);
+        // A cone slightly narrower than the one sampled, zoomed on.
+        let cfg = Chi2Config {
+            cos_theta_min: 0.85,
+            ..sphere_cfg()
+        };
+        let r = chi2_test(
+            &cfg,
+            |u, _| Some(square_to_uniform_cone(u, 0.9)),
+            |d| uniform_cone_pdf(d, 0.905) as f64,
+        );
+        assert_rejected(&r);
+    }
+
+    #[test]
+    fn chi2_lost_samples() {
+        // A sampler failing for a quarter of its sample values passes with a pdf scaled by 3/4 …
+        let sample = |u: Vec2, u1: f32| (u1 >= 0.25).then(|| square_to_cosine_hemisphere(u));
+        let r = chi2_test(&sphere_cfg(), sample, |d| {
+            0.75 * cosine_hemisphere_pdf(d) as f64
+        });
+        r.assert_passed();
+        assert!((r.integral_of_pdf - 0.75).abs() < 1e-3);
+        assert!((r.sampled_fraction - 0.75).abs() < 3e-3);
+        // … and is rejected with the unscaled one, or with one scaled by 0.7.
+        assert_rejected(&chi2_test(&sphere_cfg(), sample, |d| {
+            cosine_hemisphere_pdf(d) as f64
+        }));
+        assert_rejected(&chi2_test(&sphere_cfg(), sample, |d| {
+            0.7 * cosine_hemisphere_pdf(d) as f64
+        }));
+    }
+
+    #[test]
+    fn chi2_2d_rejects_non_uniform_triangle() {
+        // Covers the triangle, but with density 1 / (1 − b1).
+        let r = chi2_test_2d(
+            &unit_square_cfg(),
+            |u, _| Some(Vec2::new(u.x, u.y * (1.0 - u.x))),
+            triangle_pdf,
+        );
+        assert_rejected(&r);
+        // Points outside the rectangle fail the test.
+        let r = chi2_test_2d(&unit_square_cfg(), |u, _| Some(u * 1.01), |_| 1.0);
+        assert_rejected(&r);
+        assert!(r.report.contains("outside the rectangle"));
+    }
 }
