@@ -332,12 +332,50 @@ impl Accel {
         })
     }
 
-    /// Brute-force closest hit over every primitive: the oracle the BVH is tested against.
-    pub fn intersect_brute_force(&self, shapes: &[Shape], ray: &Ray) -> Option<Hit> {
+    /// Bounding boxes of [`Accel::primitives`] as (min, max), for [`Accel::intersect_brute_force`].
+    pub fn primitive_bounds(&self, shapes: &[Shape]) -> Vec<[Vec3; 2]> {
+        self.primitives
+            .iter()
+            .map(|prim| match prim {
+                Primitive::Triangle { p, .. } => {
+                    [p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2])]
+                }
+                Primitive::Sphere { center, radius, .. } => [*center - *radius, *center + *radius],
+                Primitive::Disk { shape } => match &shapes[*shape as usize].kind {
+                    ShapeKind::Disk { to_world, .. } => {
+                        let c = to_world.transform_point3(Vec3::ZERO);
+                        let e = to_world.matrix3.x_axis.abs() + to_world.matrix3.y_axis.abs();
+                        [c - Vec3::from(e), c + Vec3::from(e)]
+                    }
+                    _ => [Vec3::splat(f32::MIN), Vec3::splat(f32::MAX)],
+                },
+            })
+            .collect()
+    }
+
+    /// Brute-force closest hit: every primitive is visited in turn (a loose box test, widened
+    /// by a relative margin, only skips the exact test where it cannot hit). The oracle the
+    /// BVH is tested against; `bounds` from [`Accel::primitive_bounds`].
+    pub fn intersect_brute_force(
+        &self,
+        shapes: &[Shape],
+        bounds: &[[Vec3; 2]],
+        ray: &Ray,
+    ) -> Option<Hit> {
         let wray = WatertightRay::new(ray);
+        let inv_d = ray.d.recip();
         let mut best: Option<Hit> = None;
         let mut t_max = ray.t_max;
-        for prim in 0..self.primitives.len() {
+        for (prim, b) in bounds.iter().enumerate() {
+            let margin = (b[1] - b[0]).max_element() * 1e-3 + 1e-6;
+            let t0 = (b[0] - margin - ray.o) * inv_d;
+            let t1 = (b[1] + margin - ray.o) * inv_d;
+            let near = t0.min(t1).max_element();
+            let far = t0.max(t1).min_element();
+            // NaN (0 · ∞ on a slab boundary) must not reject: test exactly then.
+            if near > far || far < 0.0 || near > t_max {
+                continue;
+            }
             if let Some((t, bary)) = self.intersect_prim(shapes, &wray, ray, prim, t_max) {
                 t_max = t;
                 best = Some(Hit {
