@@ -1,0 +1,1 @@
+"""Shared code for radia's validation tools (compare.py, benchmark.py)."""

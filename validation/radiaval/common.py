@@ -1,0 +1,323 @@
+"""Paths, Mitsuba set-up, scene hashing, image I/O and pass rendering shared by
+compare.py and benchmark.py."""
+import glob
+import hashlib
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+import xml.etree.ElementTree as ET
+
+import numpy as np
+
+VALIDATION_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+REPO_ROOT = os.path.dirname(VALIDATION_DIR)
+REFERENCE_DIR = os.path.join(VALIDATION_DIR, "references")
+OUT_DIR = os.path.join(VALIDATION_DIR, "out")
+DEFAULT_RADIA = os.path.join(REPO_ROOT, "target", "release", "radia")
+
+# Seeds. Mitsuba's scalar variants seed pixel i of a render with seed*pixels+i
+# and the JIT variants hash (seed, lane), so distinct seeds are independent.
+# Candidate passes use seeds 0..K-1, references REF_SEED_BASE + k.
+REF_SEED_BASE = 4000
+
+
+class ValidationError(Exception):
+    """An error that makes the run meaningless (exit code 2): missing or stale
+    reference, missing binary, failed render."""
+
+
+def log(*a):
+    print(*a, flush=True)
+
+
+# ---------------------------------------------------------------------------
+# Mitsuba
+# ---------------------------------------------------------------------------
+
+_mi = None
+
+
+def _find_llvm19():
+    for pat in ("/usr/lib/*/libLLVM.so.19*", "/usr/lib/*/libLLVM-19.so*",
+                "/usr/lib/llvm-19/lib/libLLVM*.so*"):
+        hits = sorted(glob.glob(pat))
+        if hits:
+            return hits[0]
+    return None
+
+
+def mitsuba(variant):
+    """Import mitsuba and set the variant. For llvm variants point Dr.Jit at
+    LLVM 19 (LLVM 14/15, also installed on Debian bookworm, abort)."""
+    global _mi
+    if "llvm" in variant and "DRJIT_LIBLLVM_PATH" not in os.environ:
+        lib = _find_llvm19()
+        if lib:
+            os.environ["DRJIT_LIBLLVM_PATH"] = lib
+    if _mi is None:
+        import mitsuba as mi
+        _mi = mi
+    if "llvm" in variant and _find_llvm19() is None and "DRJIT_LIBLLVM_PATH" not in os.environ:
+        raise ValidationError("variant %s needs Debian's libllvm19: run validation/setup" % variant)
+    _mi.set_variant(variant)
+    return _mi
+
+
+def mitsuba_version():
+    import mitsuba as mi
+    return mi.__version__
+
+
+def set_mitsuba_threads(n):
+    """Worker threads of Dr.Jit's pool, used by scalar and llvm variants."""
+    import drjit as dr
+    if n:
+        dr.set_thread_count(int(n))
+    return dr.thread_count()
+
+
+class MitsubaRenderer:
+    """Renders passes of one scene in-process."""
+
+    def __init__(self, scene_path, res, spp, variant="scalar_rgb", threads=None):
+        self.mi = mitsuba(variant)
+        self.variant = variant
+        self.threads = set_mitsuba_threads(threads)
+        self.res, self.spp = res, spp
+        t0 = time.perf_counter()
+        self.scene = self.mi.load_file(scene_path, res=res, spp=spp)
+        self.load_time = time.perf_counter() - t0
+
+    def render(self, seed, spp=None):
+        """One pass -> float32 (H, W, 3) array; also sets self.last_time."""
+        import drjit as dr
+        spp = spp or self.spp
+        t0 = time.perf_counter()
+        img = self.mi.render(self.scene, seed=seed, spp=spp)
+        arr = np.array(img, dtype=np.float32, copy=True)
+        dr.sync_thread()
+        self.last_time = time.perf_counter() - t0
+        return arr[..., :3]
+
+    def passes(self, k, seed0=0, spp=None, progress=None):
+        out = np.empty((k, self.res, self.res, 3), np.float32)
+        t0 = time.perf_counter()
+        for i in range(k):
+            out[i] = self.render(seed0 + i, spp)
+            if progress:
+                progress(i + 1, k)
+        self.passes_time = time.perf_counter() - t0
+        return out
+
+
+def read_exr(path):
+    mi = _mi or mitsuba("scalar_rgb")
+    bmp = mi.Bitmap(path)
+    arr = np.array(bmp, dtype=np.float32, copy=True)
+    if arr.ndim == 2:
+        arr = np.repeat(arr[..., None], 3, axis=2)
+    if arr.shape[2] == 1:
+        arr = np.repeat(arr, 3, axis=2)
+    return arr[..., :3]
+
+
+def write_exr(path, arr):
+    mi = _mi or mitsuba("scalar_rgb")
+    mi.Bitmap(np.ascontiguousarray(arr, dtype=np.float32),
+              mi.Bitmap.PixelFormat.RGB).write(path)
+
+
+# ---------------------------------------------------------------------------
+# radia
+# ---------------------------------------------------------------------------
+
+_RADIA_FINAL = re.compile(
+    r"radia:\s*(\d+)x(\d+),\s*(\d+)\s*spp,\s*([\d.eE+-]+)\s*s render"
+    r"(?:,\s*([\d.eE+-]+)\s*Msamples/s)?(?:,\s*([\d.eE+-]+)\s*Mrays/s)?"
+    r"(?:,\s*(\d+)\s*invalid samples)?")
+_RADIA_LOAD = re.compile(r"radia:\s*loaded\b.*?\bin\s*([\d.eE+-]+)\s*s\b")
+
+
+def parse_radia_output(text):
+    info = {}
+    m = _RADIA_LOAD.search(text)
+    if m:
+        info["load_s"] = float(m.group(1))
+    m = None
+    for m in _RADIA_FINAL.finditer(text):
+        pass
+    if m:
+        info["width"], info["height"], info["spp"] = int(m.group(1)), int(m.group(2)), int(m.group(3))
+        info["render_s"] = float(m.group(4))
+        if m.group(5):
+            info["msamples_s"] = float(m.group(5))
+        if m.group(6):
+            info["mrays_s"] = float(m.group(6))
+        if m.group(7):
+            info["invalid"] = int(m.group(7))
+    return info
+
+
+def check_radia(binary):
+    if not (os.path.isfile(binary) and os.access(binary, os.X_OK)):
+        raise ValidationError(
+            f"radia binary not found at {binary}: build it first with "
+            "`cargo build --release -p radia-cli` (or pass --radia PATH)")
+    return binary
+
+
+class RadiaRenderer:
+    """Renders passes of one scene by running the radia binary once per pass."""
+
+    def __init__(self, scene_path, res, spp, binary=DEFAULT_RADIA, threads=None,
+                 extra_defines=(), bias=1.0):
+        self.binary = check_radia(binary)
+        self.scene_path, self.res, self.spp = scene_path, res, spp
+        self.threads = threads
+        self.extra_defines = list(extra_defines)
+        self.bias = bias  # multiply output (only for demonstrating the test's teeth)
+        self.tmp = tempfile.mkdtemp(prefix="radia-val-")
+        self.invalid = 0
+        self.infos = []
+
+    def command(self, out, seed, spp):
+        cmd = [self.binary, "render", self.scene_path, "-o", out,
+               "--spp", str(spp), "--seed", str(seed)]
+        if self.threads:
+            cmd += ["--threads", str(self.threads)]
+        cmd += ["-D", f"res={self.res}", "-D", f"spp={spp}"]
+        for d in self.extra_defines:
+            cmd += ["-D", d]
+        return cmd
+
+    def render(self, seed, spp=None):
+        spp = spp or self.spp
+        out = os.path.join(self.tmp, f"pass{seed}.exr")
+        cmd = self.command(out, seed, spp)
+        t0 = time.perf_counter()
+        proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        self.last_wall = time.perf_counter() - t0
+        if proc.returncode != 0 or not os.path.exists(out):
+            raise ValidationError("radia failed (exit %d): %s\n%s" % (
+                proc.returncode, " ".join(cmd), proc.stdout[-3000:]))
+        info = parse_radia_output(proc.stdout)
+        info["wall_s"] = self.last_wall
+        info["output"] = proc.stdout
+        self.infos.append(info)
+        self.invalid += info.get("invalid", 0)
+        arr = read_exr(out)
+        os.unlink(out)
+        if arr.shape[:2] != (self.res, self.res):
+            raise ValidationError(f"radia wrote a {arr.shape[1]}x{arr.shape[0]} image, "
+                                  f"expected {self.res}x{self.res}: {' '.join(cmd)}")
+        if self.bias != 1.0:
+            arr = arr * np.float32(self.bias)
+        return arr
+
+    def passes(self, k, seed0=0, spp=None, progress=None):
+        out = np.empty((k, self.res, self.res, 3), np.float32)
+        t0 = time.perf_counter()
+        for i in range(k):
+            out[i] = self.render(seed0 + i, spp)
+            if progress:
+                progress(i + 1, k)
+        self.passes_time = time.perf_counter() - t0
+        return out
+
+
+# ---------------------------------------------------------------------------
+# Scene hashing
+# ---------------------------------------------------------------------------
+
+def _defaults(root):
+    return {e.get("name"): e.get("value") for e in root.iter("default")
+            if e.get("name") is not None}
+
+
+def _subst(value, defs):
+    if value is None or "$" not in value:
+        return value
+    for name in sorted(defs, key=len, reverse=True):
+        value = value.replace("$" + name, str(defs[name]))
+    return value
+
+
+def scene_files(scene_path, params=None, _seen=None):
+    """The scene XML and every file it refers to (includes, meshes, textures,
+    spectra), found by parsing: attributes named 'filename' and
+    <string name="filename" value=...>. Returns absolute paths, in order."""
+    scene_path = os.path.abspath(scene_path)
+    seen = _seen if _seen is not None else []
+    if scene_path in seen:
+        return seen
+    seen.append(scene_path)
+    try:
+        root = ET.parse(scene_path).getroot()
+    except ET.ParseError as e:
+        raise ValidationError(f"cannot parse {scene_path}: {e}")
+    defs = _defaults(root)
+    defs.update({k: str(v) for k, v in (params or {}).items()})
+    base = os.path.dirname(scene_path)
+    for e in root.iter():
+        names = []
+        if e.get("filename") is not None:
+            names.append(e.get("filename"))
+        if e.tag == "string" and e.get("name") == "filename" and e.get("value") is not None:
+            names.append(e.get("value"))
+        for n in names:
+            n = _subst(n, defs)
+            p = n if os.path.isabs(n) else os.path.join(base, n)
+            p = os.path.abspath(p)
+            if p.endswith(".xml") and os.path.exists(p):
+                scene_files(p, params, seen)
+            elif p not in seen:
+                seen.append(p)
+    return seen
+
+
+def sha256_file(path):
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def rel_to_repo(path):
+    path = os.path.abspath(path)
+    try:
+        r = os.path.relpath(path, REPO_ROOT)
+    except ValueError:
+        return path
+    return path if r.startswith("..") else r
+
+
+def scene_hash(scene_path, params):
+    """sha256 over the scene's files (path relative to the scene + content)
+    and the render parameters. Returns (hash, {relpath: file hash})."""
+    files = scene_files(scene_path)
+    base = os.path.dirname(os.path.abspath(scene_path))
+    h = hashlib.sha256()
+    per_file = {}
+    for p in files:
+        rel = os.path.relpath(p, base)
+        if not os.path.exists(p):
+            raise ValidationError(f"{scene_path} refers to missing file {p}")
+        fh = sha256_file(p)
+        per_file[rel] = fh
+        h.update(rel.encode() + b"\0" + fh.encode() + b"\0")
+    h.update(json.dumps(params, sort_keys=True).encode())
+    return h.hexdigest(), per_file
+
+
+def scene_key(scene_path):
+    """Name of a scene in the reference cache: its path relative to the repo."""
+    return rel_to_repo(scene_path)
+
+
+def list_scenes(dirpath=os.path.join(REPO_ROOT, "scenes")):
+    return sorted(glob.glob(os.path.join(dirpath, "*.xml")))
