@@ -39,6 +39,11 @@ def main(argv=None):
                          "passes (a self-check of the instrument; must pass)")
     ap.add_argument("--inject-bias", type=float, default=1.0, metavar="F",
                     help="multiply the candidate's images by F (e.g. 1.02) to show the test fails")
+    ap.add_argument("--candidate-define", action="append", default=[], metavar="NAME=VALUE",
+                    help="-D for the candidate's renders only (e.g. albedo=0.98 on the furnace: must fail)")
+    ap.add_argument("--candidate-scene", metavar="XML",
+                    help="render the candidate from this XML instead (one SCENE only): must fail "
+                         "if it differs, e.g. a slightly wrong albedo")
     ap.add_argument("--no-parity", action="store_true",
                     help="skip the Mitsuba renders at the candidate's spp (issue #2 parity figures)")
     ap.add_argument("--parity-variant", default="scalar_rgb",
@@ -90,6 +95,9 @@ def main(argv=None):
         return 2 if bad else 0
 
     from radiaval.core import format_result, run_scene
+    if a.candidate_scene and len(scenes) != 1:
+        log("compare.py: --candidate-scene needs exactly one SCENE")
+        return 2
 
     t0 = time.perf_counter()
     results, errors = [], []
@@ -99,7 +107,8 @@ def main(argv=None):
             r = run_scene(s, res, spp, passes, candidate=a.candidate, radia=a.radia,
                           threads=a.threads, bias=a.inject_bias, parity=not a.no_parity,
                           parity_variant=a.parity_variant, ref_dir=a.ref_dir, out_dir=a.out,
-                          alpha=a.alpha, tolerance=a.tolerance)
+                          alpha=a.alpha, tolerance=a.tolerance, candidate_scene=a.candidate_scene,
+                          candidate_defines=a.candidate_define)
         except ValidationError as e:
             log(f"ERROR  {rel_to_repo(s)}: {e}")
             errors.append((s, str(e)))

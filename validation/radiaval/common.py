@@ -83,13 +83,15 @@ def set_mitsuba_threads(n):
 class MitsubaRenderer:
     """Renders passes of one scene in-process."""
 
-    def __init__(self, scene_path, res, spp, variant="scalar_rgb", threads=None):
+    def __init__(self, scene_path, res, spp, variant="scalar_rgb", threads=None, defines=()):
         self.mi = mitsuba(variant)
         self.variant = variant
         self.threads = set_mitsuba_threads(threads)
         self.res, self.spp = res, spp
         t0 = time.perf_counter()
-        self.scene = self.mi.load_file(scene_path, res=res, spp=spp)
+        params = dict(d.split("=", 1) for d in defines)
+        params.update(res=res, spp=spp)
+        self.scene = self.mi.load_file(scene_path, **params)
         self.load_time = time.perf_counter() - t0
 
     def render(self, seed, spp=None):
@@ -317,6 +319,28 @@ def scene_hash(scene_path, params):
 def scene_key(scene_path):
     """Name of a scene in the reference cache: its path relative to the repo."""
     return rel_to_repo(scene_path)
+
+
+def derive_scene(src, dst_dir, replacements):
+    """Copy scene src into dst_dir with text replacements [(old, new)], making
+    its file references absolute so that they still resolve. Returns the path."""
+    text = open(src).read()
+    for old, new in replacements:
+        if old not in text:
+            raise ValueError(f"{old!r} not in {src}")
+        text = text.replace(old, new)
+    base = os.path.dirname(os.path.abspath(src))
+
+    def absolutise(m):
+        v = m.group(2)
+        return m.group(1) + (v if os.path.isabs(v) or "$" in v else os.path.join(base, v)) + m.group(3)
+    text = re.sub(r'(<string\s+name="filename"\s+value=")([^"]*)(")', absolutise, text)
+    text = re.sub(r'(\sfilename=")([^"]*)(")', absolutise, text)
+    os.makedirs(dst_dir, exist_ok=True)
+    dst = os.path.join(dst_dir, os.path.basename(src))
+    with open(dst, "w") as f:
+        f.write(text)
+    return dst
 
 
 def list_scenes(dirpath=os.path.join(REPO_ROOT, "scenes")):

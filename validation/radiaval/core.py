@@ -42,7 +42,7 @@ def parity_figures(cand, mts, ref_mean):
 def run_scene(scene_path, res, spp, passes, candidate="radia", radia=DEFAULT_RADIA,
               threads=2, bias=1.0, parity=True, parity_variant="scalar_rgb",
               ref_dir=None, out_dir=OUT_DIR, alpha=0.01, tolerance=0.0025,
-              candidate_scene=None, cand_label=None):
+              candidate_scene=None, cand_label=None, candidate_defines=()):
     """Compare one scene; returns a dict (also written to out_dir/NAME/result.json).
 
     candidate: "radia" (the binary) or "mitsuba" (independent Mitsuba passes: the
@@ -58,6 +58,10 @@ def run_scene(scene_path, res, spp, passes, candidate="radia", radia=DEFAULT_RAD
     label = cand_label or ("radia" if candidate == "radia" else "Mitsuba (independent passes)")
     if bias != 1.0:
         label += f" x {bias:g}"
+    if candidate_defines:
+        label += " with " + " ".join(candidate_defines)
+    if candidate_scene:
+        label += f" rendering {os.path.basename(candidate_scene)}"
 
     def prog(what):
         def f(i, n):
@@ -68,7 +72,8 @@ def run_scene(scene_path, res, spp, passes, candidate="radia", radia=DEFAULT_RAD
     t0 = time.perf_counter()
     info = {}
     if candidate == "radia":
-        r = RadiaRenderer(cscene, res, spp, binary=radia, threads=threads, bias=bias)
+        r = RadiaRenderer(cscene, res, spp, binary=radia, threads=threads, bias=bias,
+                          extra_defines=candidate_defines)
         cand = r.passes(passes, seed0=0, progress=prog("radia"))
         info = dict(invalid_samples=r.invalid,
                     radia_render_s=sum(i.get("render_s", 0.0) for i in r.infos),
@@ -78,7 +83,8 @@ def run_scene(scene_path, res, spp, passes, candidate="radia", radia=DEFAULT_RAD
                     radia_last_output=r.infos[-1]["output"].strip().splitlines()[-1:]
                     if r.infos else [])
     elif candidate == "mitsuba":
-        r = MitsubaRenderer(cscene, res, spp, variant=parity_variant, threads=threads)
+        r = MitsubaRenderer(cscene, res, spp, variant=parity_variant, threads=threads,
+                            defines=candidate_defines)
         # Seeds far from the reference's (REF_SEED_BASE + k) and from the parity
         # passes (0..K-1): independent of both.
         cand = r.passes(passes, seed0=2000, progress=prog("Mitsuba candidate"))
