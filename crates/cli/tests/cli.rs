@@ -1,0 +1,146 @@
+//! The `radia` binary end to end: bad input gives a clear error (file, line, problem) and a
+//! non-zero exit without a panic or an output file; a good scene renders; thread count does
+//! not change the image.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn radia(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_radia")).args(args).output().expect("radia runs")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("radia-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+const GOOD_SCENE: &str = r#"<scene version="3.0.0">
+    <default name="spp" value="4"/>
+    <sensor type="perspective">
+        <float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0, 0, -4" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
+        <film type="hdrfilm">
+            <integer name="width" value="24"/><integer name="height" value="16"/>
+            <rfilter type="gaussian"/>
+        </film>
+    </sensor>
+    <shape type="sphere"><bsdf type="diffuse"/></shape>
+    <shape type="rectangle">
+        <transform name="to_world"><rotate x="1" angle="90"/><translate y="3"/></transform>
+        <emitter type="area"><rgb name="radiance" value="3"/></emitter>
+    </shape>
+    <emitter type="constant"><rgb name="radiance" value="0.2"/></emitter>
+</scene>"#;
+
+/// Runs radia on a broken scene; checks the error names the file and line, and no image.
+fn expect_error(name: &str, scene: &str, line: u32, needle: &str) {
+    let dir = temp_dir(name);
+    let path = dir.join("scene.xml");
+    std::fs::write(&path, scene).unwrap();
+    let out_path = dir.join("out.exr");
+    let out = radia(&["render", path.to_str().unwrap(), "-o", out_path.to_str().unwrap(), "-q"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{name}: exit status {:?}", out.status);
+    assert_ne!(out.status.code(), Some(101), "{name}: panicked: {stderr}");
+    assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+    let location = format!("{}:{line}", path.display());
+    assert!(stderr.contains(&location), "{name}: expected '{location}' in: {stderr}");
+    assert!(stderr.to_lowercase().contains(needle), "{name}: expected '{needle}' in: {stderr}");
+    assert!(!out_path.exists(), "{name}: an output file was written");
+    assert!(!Path::new(&format!("{}.partial", out_path.display())).exists());
+}
+
+#[test]
+fn malformed_xml_names_file_and_line() {
+    expect_error(
+        "malformed",
+        "<scene version=\"3.0.0\">\n  <shape type=\"sphere\">\n  </shap>\n</scene>\n",
+        3,
+        "shap",
+    );
+}
+
+#[test]
+fn missing_mesh_names_file_line_and_mesh() {
+    expect_error(
+        "missing-mesh",
+        "<scene version=\"3.0.0\">\n\n  <shape type=\"obj\">\n    <string name=\"filename\" value=\"nowhere/bunny.obj\"/>\n  </shape>\n</scene>\n",
+        3,
+        "bunny.obj",
+    );
+}
+
+#[test]
+fn unsupported_element_names_file_and_line() {
+    expect_error(
+        "unsupported",
+        "<scene version=\"3.0.0\">\n  <shape type=\"sphere\"/>\n  <volume type=\"gridvolume\"/>\n</scene>\n",
+        3,
+        "volume",
+    );
+    expect_error(
+        "unknown-plugin",
+        "<scene version=\"3.0.0\">\n  <shape type=\"teapot\"/>\n</scene>\n",
+        2,
+        "teapot",
+    );
+}
+
+#[test]
+fn missing_scene_file_is_an_error() {
+    let out = radia(&["render", "/nonexistent/scene.xml", "-o", "/tmp/never.exr", "-q"]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("/nonexistent/scene.xml"), "{stderr}");
+    assert!(!stderr.contains("panicked"));
+}
+
+#[test]
+fn renders_png_and_exr() {
+    let dir = temp_dir("good");
+    let path = dir.join("scene.xml");
+    std::fs::write(&path, GOOD_SCENE).unwrap();
+    for ext in ["exr", "png"] {
+        let out_path = dir.join(format!("out.{ext}"));
+        let out = radia(&["render", path.to_str().unwrap(), "-o", out_path.to_str().unwrap(), "-q"]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(std::fs::metadata(&out_path).unwrap().len() > 0);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(stdout.contains("Mrays/s") && stdout.contains("invalid samples"), "{stdout}");
+    }
+}
+
+#[test]
+fn thread_count_does_not_change_the_image() {
+    let dir = temp_dir("threads");
+    let path = dir.join("scene.xml");
+    std::fs::write(&path, GOOD_SCENE).unwrap();
+    let mut images = Vec::new();
+    for threads in ["1", "2", "3"] {
+        let out_path = dir.join(format!("t{threads}.exr"));
+        let out = radia(&[
+            "render", path.to_str().unwrap(), "-o", out_path.to_str().unwrap(), "-q",
+            "--threads", threads, "--spp", "20", "--seed", "7",
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        images.push(std::fs::read(&out_path).unwrap());
+    }
+    assert_eq!(images[0], images[1], "1 vs 2 threads");
+    assert_eq!(images[0], images[2], "1 vs 3 threads");
+    // A different seed gives a different image.
+    let other = dir.join("seed8.exr");
+    radia(&["render", path.to_str().unwrap(), "-o", other.to_str().unwrap(), "-q", "--spp", "20", "--seed", "8"]);
+    assert_ne!(std::fs::read(other).unwrap(), images[0]);
+}
+
+#[test]
+fn bad_output_extension_is_an_error() {
+    let dir = temp_dir("ext");
+    let path = dir.join("scene.xml");
+    std::fs::write(&path, GOOD_SCENE).unwrap();
+    let out = radia(&["render", path.to_str().unwrap(), "-o", dir.join("x.jpg").to_str().unwrap(), "-q"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("x.jpg"));
+}
