@@ -620,12 +620,14 @@ impl<'a, 'x> Parser<'a, 'x> {
                             format!("could not parse RGB value \"{v}\" of <rgb name=\"{name}\">"),
                         ))
                     }
-                    (k, _) => return Err(self.err(
-                        epos,
-                        format!(
+                    (k, _) => {
+                        return Err(self.err(
+                            epos,
+                            format!(
                             "<rgb name=\"{name}\"> requires one or three values (got {k}: \"{v}\")"
                         ),
-                    )),
+                        ))
+                    }
                 };
                 self.add_prop(parent_idx, &name, Value::Rgb(c), epos)
             }
@@ -975,13 +977,15 @@ fn resolve_refs(doc: &mut Doc, ids: &HashMap<String, (usize, TextPos)>) -> Resul
             if let Value::Ref(id) = &prop.value {
                 match ids.get(id) {
                     Some(&(target, _)) => prop.value = Value::Object(target),
-                    None => return Err(LoadError::at(
-                        &doc.file,
-                        prop.pos,
-                        format!(
+                    None => {
+                        return Err(LoadError::at(
+                            &doc.file,
+                            prop.pos,
+                            format!(
                             "unresolved reference to \"{id}\": no object with id=\"{id}\" exists"
                         ),
-                    )),
+                        ))
+                    }
                 }
             }
         }
