@@ -103,7 +103,7 @@ impl WatertightRay {
     }
 
     /// Returns (t, b1, b2) for a hit with 0 < t < t_max.
-    #[inline]
+    #[inline(always)]
     fn intersect(&self, p: &[Vec3; 3], t_max: f32) -> Option<(f32, f32, f32)> {
         let a = p[0] - self.o;
         let b = p[1] - self.o;
@@ -270,7 +270,7 @@ impl Accel {
         obvhs::ray::Ray::new(Vec3A::from(ray.o), Vec3A::from(ray.d), 0.0, ray.t_max)
     }
 
-    #[inline]
+    #[inline(always)]
     fn intersect_prim(
         &self,
         shapes: &[Shape],
