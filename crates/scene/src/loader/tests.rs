@@ -1520,3 +1520,110 @@ fn loader_repo_furnace() {
     );
     assert_eq!(s.film.filter, FilterDesc::Box);
 }
+
+// ---------------------------------------------------------------------------------------
+// Robustness: corrupted inputs give errors, never panics
+
+/// A small deterministic generator (64-bit LCG).
+struct Lcg(u64);
+
+impl Lcg {
+    fn next(&mut self) -> u64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        self.0 >> 33
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+}
+
+/// `data` with a few random byte edits: replace, delete, duplicate a span, insert a
+/// character that matters to the format.
+fn mutate(rng: &mut Lcg, data: &[u8], specials: &[u8]) -> Vec<u8> {
+    let mut d = data.to_vec();
+    for _ in 0..1 + rng.below(4) {
+        let at = rng.below(d.len());
+        match rng.below(4) {
+            0 if !d.is_empty() => d[at] = specials[rng.below(specials.len())],
+            1 if !d.is_empty() => {
+                let end = (at + 1 + rng.below(8)).min(d.len());
+                d.drain(at..end);
+            }
+            2 => {
+                let end = (at + 1 + rng.below(16)).min(d.len());
+                let span = d[at..end].to_vec();
+                d.splice(at..at, span);
+            }
+            _ => d.insert(at.min(d.len()), specials[rng.below(specials.len())]),
+        }
+    }
+    d
+}
+
+#[test]
+fn loader_corrupted_inputs_never_panic() {
+    let xml = scene_xml(
+        r#"<default name="r" value="0.5"/>
+        <integrator type="path"><integer name="max_depth" value="4"/></integrator>
+        <bsdf type="twosided" id="m"><bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.3, $r"/></bsdf></bsdf>
+        <shape type="obj"><string name="filename" value="m.obj"/><ref id="m"/>
+            <transform name="to_world"><rotate y="1" angle="30"/><scale value="2"/><lookat origin="0 0 1" target="0 0 0" up="0 1 0"/></transform></shape>
+        <shape type="ply"><string name="filename" value="a.ply"/><emitter type="area"><rgb name="radiance" value="1 2 3"/></emitter></shape>
+        <shape type="sphere"><point name="center" value="1 2 3"/><float name="radius" value="$r"/></shape>
+        <shape type="cube"><transform name="to_world"><matrix value="1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1"/></transform></shape>
+        <emitter type="constant"/>"#,
+    );
+    let obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 1\nvn 0 0 1\nf 1/1/1 2/2/1 3//1 4\nf -1 -2 -3\n";
+    let dir = write_files(
+        "fuzz",
+        &[
+            ("m.obj", obj.as_bytes()),
+            ("a.ply", ply_ascii_quad().as_bytes()),
+            ("b.ply", &ply_binary_quad(false)),
+        ],
+    );
+    let scene_path = dir.join("scene.xml");
+    // In memory (the mesh files stay intact; the readers get the corrupted bytes directly).
+    let finalize = |raw: mesh::RawMesh| mesh::finalize(raw, &glam::DMat4::IDENTITY, false, false);
+    let mut rng = Lcg(12345);
+    let mut errors = 0;
+    for i in 0..2000 {
+        let bad = mutate(&mut rng, xml.as_bytes(), b"<>/\"=$ \n0-9.,x");
+        let text = String::from_utf8_lossy(&bad);
+        let r = xml::parse_str(&scene_path, &text, &[]).and_then(|doc| build::build_scene(&doc));
+        errors += r.is_err() as usize;
+        let bad = mutate(&mut rng, obj.as_bytes(), b"vf/ -0123456789\n.e");
+        if let Ok(raw) = obj::parse_obj(&String::from_utf8_lossy(&bad), true, i % 3 == 0) {
+            let _ = finalize(raw);
+        }
+        let bad = mutate(
+            &mut rng,
+            ply_ascii_quad().as_bytes(),
+            b" \n-0123456789.eplyformatelementpropertylist",
+        );
+        if let Ok(raw) = ply::parse_ply(&bad, false, false) {
+            let _ = finalize(raw);
+        }
+        let bad = mutate(
+            &mut rng,
+            &ply_binary_quad(i % 2 == 0),
+            &[0, 1, 3, 4, 0x7f, 0x80, 0xff, b'\n'],
+        );
+        if let Ok(raw) = ply::parse_ply(&bad, i % 3 == 0, i % 5 == 0) {
+            let _ = finalize(raw);
+        }
+    }
+    assert!(errors > 100, "most corrupted scenes are errors ({errors})");
+
+    // Deep nesting is an error, not a stack overflow.
+    let deep = format!(
+        "<scene version=\"3.0.0\">{}{}</scene>",
+        "<bsdf type=\"twosided\">".repeat(5000),
+        "</bsdf>".repeat(5000)
+    );
+    let e = load_in(&temp_dir("deep"), &deep, &[]).expect_err("deep nesting");
+    assert!(e.to_string().contains("nested more than"), "{e}");
+}

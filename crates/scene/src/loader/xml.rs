@@ -116,8 +116,67 @@ pub(crate) struct Doc {
     pub nodes: Vec<Node>,
 }
 
-/// Deeper element nesting than this is refused (the parser recurses).
-const MAX_DEPTH: usize = 200;
+/// Deeper element nesting than this is refused (the parsers recurse).
+const MAX_DEPTH: usize = 100;
+
+/// The byte offset of the first start tag nested deeper than `max` levels, if any. Comments,
+/// CDATA sections, processing instructions and declarations are skipped and quoted attribute
+/// values may contain '>' or '/', so valid XML is counted exactly; on malformed input the
+/// count may be off, which only matters for the parse error that follows anyway.
+fn nesting_exceeds(text: &str, max: usize) -> Option<usize> {
+    let b = text.as_bytes();
+    let skip_past = |from: usize, end: &str| {
+        text[from..]
+            .find(end)
+            .map_or(b.len(), |k| from + k + end.len())
+    };
+    let mut depth = 0usize;
+    let mut i = 0;
+    while let Some(k) = text[i..].find('<') {
+        let p = i + k;
+        let rest = &text[p..];
+        if rest.starts_with("<!--") {
+            i = skip_past(p + 4, "-->");
+        } else if rest.starts_with("<![CDATA[") {
+            i = skip_past(p + 9, "]]>");
+        } else if rest.starts_with("<?") {
+            i = skip_past(p + 2, "?>");
+        } else if rest.starts_with("<!") {
+            i = skip_past(p + 2, ">");
+        } else if rest.starts_with("</") {
+            depth = depth.saturating_sub(1);
+            i = skip_past(p + 2, ">");
+        } else {
+            // A start tag: find its '>' outside quotes; "/>" closes it at once.
+            let mut j = p + 1;
+            let mut quote = None;
+            let mut last = 0u8;
+            while j < b.len() {
+                let c = b[j];
+                match quote {
+                    Some(q) if c == q => quote = None,
+                    Some(_) => {}
+                    None if c == b'"' || c == b'\'' => quote = Some(c),
+                    None if c == b'>' => break,
+                    None if !c.is_ascii_whitespace() => last = c,
+                    None => {}
+                }
+                j += 1;
+            }
+            if last != b'/' {
+                depth += 1;
+                if depth > max {
+                    return Some(p);
+                }
+            }
+            i = (j + 1).min(b.len());
+        }
+        if i >= b.len() {
+            break;
+        }
+    }
+    None
+}
 
 /// Reads and parses `path`; `defines` act as Mitsuba's `-D name=value`.
 pub(crate) fn parse_file(path: &Path, defines: &[(String, String)]) -> Result<Doc, LoadError> {
@@ -155,6 +214,24 @@ pub(crate) fn parse_str(
     defines: &[(String, String)],
 ) -> Result<Doc, LoadError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    // roxmltree recurses once per nesting level: refuse absurd nesting before it overflows
+    // the stack.
+    if let Some(offset) = nesting_exceeds(text, MAX_DEPTH) {
+        let line = text[..offset].matches('\n').count() + 1;
+        let col = text[..offset]
+            .rsplit('\n')
+            .next()
+            .map_or(0, |l| l.chars().count())
+            + 1;
+        return Err(LoadError::at(
+            path,
+            TextPos {
+                line: line as u32,
+                col: col as u32,
+            },
+            format!("elements are nested more than {MAX_DEPTH} levels deep"),
+        ));
+    }
     let xml = roxmltree::Document::parse(text).map_err(|e| {
         let p = e.pos();
         let mut msg = e.to_string();
