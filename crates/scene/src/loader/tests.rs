@@ -13,18 +13,33 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 // ---------------------------------------------------------------------------------------
 // Helpers
 
-/// A new empty directory under the system temp dir.
-fn temp_dir(name: &str) -> PathBuf {
+/// A fresh directory under the system temp dir, removed again when dropped.
+struct TempDir(PathBuf);
+
+impl std::ops::Deref for TempDir {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn temp_dir(name: &str) -> TempDir {
     static COUNTER: AtomicUsize = AtomicUsize::new(0);
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
     let dir = std::env::temp_dir().join(format!("radia-loader-{}-{name}-{n}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("create temp dir");
-    dir
+    TempDir(dir)
 }
 
 /// Writes `files` (name, contents) into a fresh directory; returns the directory.
-fn write_files(name: &str, files: &[(&str, &[u8])]) -> PathBuf {
+fn write_files(name: &str, files: &[(&str, &[u8])]) -> TempDir {
     let dir = temp_dir(name);
     for (f, data) in files {
         let p = dir.join(f);
