@@ -332,6 +332,11 @@ impl Accel {
         })
     }
 
+    /// The exact test of one primitive (index into [`Accel::primitives`]) against `ray`.
+    pub fn intersect_primitive(&self, shapes: &[Shape], ray: &Ray, prim: usize) -> Option<(f32, Vec2)> {
+        self.intersect_prim(shapes, &WatertightRay::new(ray), ray, prim, ray.t_max)
+    }
+
     /// Bounding boxes of [`Accel::primitives`] as (min, max), for [`Accel::intersect_brute_force`].
     pub fn primitive_bounds(&self, shapes: &[Shape]) -> Vec<[Vec3; 2]> {
         self.primitives
