@@ -113,11 +113,15 @@ def main(argv=None):
             log(f"ERROR  {rel_to_repo(s)}: {e}")
             errors.append((s, str(e)))
             continue
+        except Exception as e:  # e.g. Mitsuba cannot load the scene
+            log(f"ERROR  {rel_to_repo(s)}: {type(e).__name__}: {e}")
+            errors.append((s, f"{type(e).__name__}: {e}"))
+            continue
         log(format_result(r))
         results.append(r)
     total = time.perf_counter() - t0
 
-    if results and not a.no_report:
+    if (results or errors) and not a.no_report:
         from radiaval.report import write_report
         path = write_report(results, errors, a.out, mode="quick" if a.quick else "full",
                             total_time=total)
