@@ -62,12 +62,13 @@ pub struct Hit {
 #[derive(Clone, Copy)]
 struct WatertightRay {
     o: Vec3,
-    kx: usize,
-    ky: usize,
-    kz: usize,
-    sx: f32,
-    sy: f32,
-    sz: f32,
+    /// Rows of the shear that maps p − o to the ray's frame: x' = a[kx] − sx·a[kz],
+    /// y' = a[ky] − sy·a[kz], z' = sz·a[kz], where kz is the dominant axis of the direction.
+    /// As dot products with rows holding 1, −s and 0 they give the same floating-point values
+    /// as the paper's permuted form, without indexing by a run-time axis.
+    rx: Vec3,
+    ry: Vec3,
+    rz: Vec3,
 }
 
 impl WatertightRay {
@@ -91,14 +92,17 @@ impl WatertightRay {
             std::mem::swap(&mut kx, &mut ky);
         }
         let sz = 1.0 / ray.d[kz];
+        let axis = |k: usize, v: f32| {
+            let mut r = Vec3::ZERO;
+            r[k] = v;
+            r
+        };
+        let (sx, sy) = (ray.d[kx] * sz, ray.d[ky] * sz);
         Self {
             o: ray.o,
-            kx,
-            ky,
-            kz,
-            sx: ray.d[kx] * sz,
-            sy: ray.d[ky] * sz,
-            sz,
+            rx: axis(kx, 1.0) + axis(kz, -sx),
+            ry: axis(ky, 1.0) + axis(kz, -sy),
+            rz: axis(kz, sz),
         }
     }
 
@@ -108,21 +112,16 @@ impl WatertightRay {
         let a = p[0] - self.o;
         let b = p[1] - self.o;
         let c = p[2] - self.o;
-        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
-        let ax = a[kx] - self.sx * a[kz];
-        let ay = a[ky] - self.sy * a[kz];
-        let bx = b[kx] - self.sx * b[kz];
-        let by = b[ky] - self.sy * b[kz];
-        let cx = c[kx] - self.sx * c[kz];
-        let cy = c[ky] - self.sy * c[kz];
+        let (ax, ay) = (a.dot(self.rx), a.dot(self.ry));
+        let (bx, by) = (b.dot(self.rx), b.dot(self.ry));
+        let (cx, cy) = (c.dot(self.rx), c.dot(self.ry));
         let mut u = cx * by - cy * bx;
         let mut v = ax * cy - ay * cx;
         let mut w = bx * ay - by * ax;
         if u == 0.0 || v == 0.0 || w == 0.0 {
             // Exactly on an edge in single precision: decide in double precision.
-            let (ax, ay, bx, by, cx, cy) = (
-                ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64,
-            );
+            let (ax, ay, bx, by, cx, cy) =
+                (ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64);
             u = (cx * by - cy * bx) as f32;
             v = (ax * cy - ay * cx) as f32;
             w = (bx * ay - by * ax) as f32;
@@ -134,10 +133,7 @@ impl WatertightRay {
         if det == 0.0 {
             return None;
         }
-        let az = self.sz * a[kz];
-        let bz = self.sz * b[kz];
-        let cz = self.sz * c[kz];
-        let t_scaled = u * az + v * bz + w * cz;
+        let t_scaled = u * a.dot(self.rz) + v * b.dot(self.rz) + w * c.dot(self.rz);
         let inv_det = 1.0 / det;
         let t = t_scaled * inv_det;
         if !(t > 0.0 && t < t_max) {
