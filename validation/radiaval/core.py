@@ -102,6 +102,9 @@ def run_scene(scene_path, res, spp, passes, candidate="radia", radia=DEFAULT_RAD
         mts = m.passes(passes, seed0=0, progress=prog(f"Mitsuba {parity_variant}"))
         mts_time = time.perf_counter() - t0
 
+    nonfinite = int((~np.isfinite(cand)).sum())
+    if nonfinite:
+        info["nonfinite_values"] = nonfinite
     res_test = stats.compare_to_reference(cand, ref.mean, ref.var, ref.passes,
                                           alpha=alpha, tolerance=tolerance)
     par = parity_figures(cand, mts, ref.mean)
@@ -160,6 +163,8 @@ def format_result(r):
         lines.append(s + f", relMSE vs reference {p['relmse_candidate']:.4e}")
     if r.get("invalid_samples"):
         lines.append(f"  WARNING: radia reported {r['invalid_samples']} invalid samples")
+    if r.get("nonfinite_values"):
+        lines.append(f"  WARNING: {r['nonfinite_values']} NaN or infinite values in the candidate's passes")
     lines.append(f"  time: candidate {r['candidate_time_s']:.1f} s, Mitsuba {r['mitsuba_time_s']:.1f} s, "
                  f"total {r['total_time_s']:.1f} s")
     return "\n".join(lines)

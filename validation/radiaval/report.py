@@ -29,7 +29,7 @@ def exposure_for(ref):
 
 
 def to_srgb(img, exposure=1.0):
-    x = np.clip(np.asarray(img, np.float64) * exposure, 0.0, 1.0)
+    x = np.clip(np.nan_to_num(np.asarray(img, np.float64) * exposure, nan=0.0, posinf=1.0), 0.0, 1.0)
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
 
 
@@ -80,9 +80,10 @@ def maps_png(r, path):
     t1, tb = _signed_max_channel(lv1.t), _signed_max_channel(lvb.t)
     tc = stats.t_critical(test.alpha_test, float(np.median(lv1.nu)))
 
-    lim_rel = float(np.percentile(np.abs(rel), 95))
-    lim_rel = min(max(lim_rel, 0.02), 1.0)
-    lim_relb = min(max(float(np.percentile(np.abs(relb), 95)), 0.02), 1.0)
+    def _lim(x):
+        x = np.abs(x[np.isfinite(x)])
+        return min(max(float(np.percentile(x, 95)) if x.size else 0.0, 0.02), 1.0)
+    lim_rel, lim_relb = _lim(rel), _lim(relb)
     lim_t = max(tc, 3.0)
     fig, axes = plt.subplots(1, 4, figsize=(16, 4.3), constrained_layout=True)
     specs = [

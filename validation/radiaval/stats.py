@@ -270,6 +270,10 @@ def compare_to_reference(cand_passes, ref_mean, ref_var, ref_k,
             rv = block_sum(ref_var, b) / (n * n)
         cm, cv, _ = pass_moments(cb)
         t, nu = welch(cm, cv, k - 1, rm, rv, ref_k - 1)
+        # NaN or infinite values (in a pass, hence in a mean or variance) are
+        # rejections, never silent passes.
+        t = np.where(np.isfinite(t), t, np.inf)
+        nu = np.where(np.isfinite(nu), nu, min(k, ref_k) - 1)
         stats.append((b, t, nu))
     n_total = sum(t.size for _, t, _ in stats)
     alpha_test = sidak_alpha(alpha, n_total)

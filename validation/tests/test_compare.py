@@ -78,6 +78,18 @@ class Statistics(unittest.TestCase):
         self.assertEqual(fails_biased, 20)
 
 
+    def test_nan_pixels_fail(self):
+        rng = np.random.default_rng(2)
+        truth = rng.uniform(0.1, 1.0, size=(32, 32, 3))
+        rm, rv, rk = stats.pass_moments(truth + 0.01 * rng.standard_normal((32,) + truth.shape))
+        cand = truth + 0.05 * rng.standard_normal((32,) + truth.shape)
+        self.assertTrue(stats.compare_to_reference(cand, rm, rv, rk).passed)
+        cand[3, :, :5, :] = np.nan        # one pass, 5 columns of NaN
+        res = stats.compare_to_reference(cand, rm, rv, rk)
+        self.assertFalse(res.passed)
+        self.assertEqual(res.level(0).n_rejected, 3)
+
+
 class Teeth(unittest.TestCase):
     """Mitsuba against a Mitsuba reference of the fixture scene."""
 
