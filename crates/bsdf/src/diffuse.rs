@@ -20,7 +20,13 @@ pub struct Diffuse {
 
 impl Diffuse {
     pub fn new(reflectance: impl Into<Texture>) -> Self {
-        Self { reflectance: reflectance.into() }
+        Self {
+            reflectance: reflectance.into(),
+        }
+    }
+
+    pub fn flags(&self) -> LobeFlags {
+        LobeFlags::DIFFUSE_REFLECTION
     }
 
     #[inline]
@@ -56,5 +62,53 @@ impl Diffuse {
             eta: 1.0,
             lobe: LobeFlags::DIFFUSE_REFLECTION,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::*;
+    use crate::Bsdf;
+
+    fn lambert(r: f32) -> Bsdf {
+        Bsdf::Diffuse(Diffuse::new(Spectrum::splat(r)))
+    }
+
+    #[test]
+    fn chi2_and_consistency() {
+        let b = lambert(0.5);
+        for wi in incident_directions(false) {
+            assert_chi2("diffuse", &b, wi, Zoom::SPHERE, 200_000);
+            check_consistency("diffuse", &b, wi, 20_000, 1e-5);
+        }
+        check_reciprocity("diffuse", &b, 1000, false);
+    }
+
+    /// The directional albedo of Lambert is its reflectance kd at every angle.
+    #[test]
+    fn albedo_is_reflectance() {
+        for kd in [1.0f32, 0.3] {
+            let b = lambert(kd);
+            for wi in incident_directions(false) {
+                let (a, e) = albedo_sampled(&b, wi, 10_000);
+                // Cosine sampling: every weight is kd, no variance.
+                assert!(
+                    (a - Spectrum::splat(kd)).abs().max_element() < 1e-5,
+                    "{a} ± {e}"
+                );
+                assert_albedo_unbiased("diffuse", &b, wi, 200_000, 0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn one_sided() {
+        let b = lambert(0.5);
+        let (up, down) = (dir(0.5, 0.0), dir(-0.5, 1.0));
+        assert_eq!(b.eval(&SP, down, up), Spectrum::ZERO);
+        assert_eq!(b.eval(&SP, up, down), Spectrum::ZERO);
+        assert_eq!(b.pdf(&SP, up, down), 0.0);
+        assert!(b.sample(&SP, down, 0.5, Vec2::splat(0.5)).is_none());
     }
 }

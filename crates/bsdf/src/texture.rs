@@ -16,6 +16,14 @@ impl Texture {
         }
     }
 
+    /// The mean over the texture and the three channels (Mitsuba's `Texture::mean()`), for
+    /// lobe sampling weights fixed at load time.
+    pub fn mean(&self) -> f32 {
+        match self {
+            Texture::Constant(c) => crate::mean(*c),
+        }
+    }
+
     /// True when the texture has the same value everywhere.
     pub fn is_constant(&self) -> bool {
         matches!(self, Texture::Constant(_))
