@@ -1,16 +1,34 @@
 //! BSDF plugins: one function per Mitsuba plugin name, dispatched in [`build_bsdf`].
 //! To add a model, add an arm to the `match` and a function that reads its parameters
 //! through [`Props`] (every parameter it does not read is reported as unknown).
+//!
+//! Names, defaults and checks follow Mitsuba 3.9.1's `src/bsdfs/*.cpp`,
+//! `include/mitsuba/render/microfacet.h` and `ior.h`. radia's own models (`phong`,
+//! `blinnphong`, `cooktorrance`) and options (`height_correlated`) are marked as such; a
+//! scene using them does not load in Mitsuba.
 
 use super::build::Builder;
 use super::props::Props;
-use super::xml::Kind;
+use super::xml::{Kind, Value};
 use super::LoadError;
-use glam::Vec3;
-use radia_bsdf::{Bsdf, Diffuse, LobeFlags, TwoSided};
+use glam::{DVec3, Vec3};
+use radia_bsdf::ior::{
+    lookup_conductor, lookup_dielectric_ior, CONDUCTOR_PRESETS, DIELECTRIC_IORS,
+};
+use radia_bsdf::microfacet::Shadowing;
+use radia_bsdf::{
+    Blend, BlinnPhong, Bsdf, Conductor, CookTorrance, CookTorranceFresnel, Dielectric, Diffuse,
+    LobeFlags, MicrofacetDistribution, MicrofacetType, Phong, Plastic, RoughConductor,
+    RoughDielectric, RoughPlastic, ThinDielectric, TwoSided,
+};
 
 /// Nested BSDFs (twosided of twosided ...) deeper than this are refused.
 const MAX_NESTING: usize = 32;
+
+/// The plugin names [`build_bsdf`] knows, for the error message.
+const SUPPORTED: &str = "diffuse, conductor, roughconductor, dielectric, thindielectric, \
+roughdielectric, plastic, roughplastic, blendbsdf, twosided, and radia's phong, blinnphong, \
+cooktorrance";
 
 /// Builds the BSDF of node `idx`. A node referenced several times is built once.
 pub(crate) fn build_bsdf(
@@ -29,10 +47,21 @@ pub(crate) fn build_bsdf(
     }
     let bsdf = match p.node.plugin.as_str() {
         "diffuse" => diffuse(p)?,
+        "conductor" => conductor(p)?,
+        "roughconductor" => rough_conductor(p)?,
+        "dielectric" => dielectric(p)?,
+        "thindielectric" => thin_dielectric(p)?,
+        "roughdielectric" => rough_dielectric(p)?,
+        "plastic" => plastic(p)?,
+        "roughplastic" => rough_plastic(p)?,
+        "blendbsdf" => blend(b, p, nesting)?,
         "twosided" => twosided(b, p, nesting)?,
+        "phong" => phong(b, p, false)?,
+        "blinnphong" => phong(b, p, true)?,
+        "cooktorrance" => cook_torrance(p)?,
         other => {
             return Err(p.err(format!(
-                "unsupported BSDF plugin type \"{other}\" (radia supports: diffuse, twosided)"
+                "unsupported BSDF plugin type \"{other}\" (radia supports: {SUPPORTED})"
             )))
         }
     };
@@ -54,36 +83,708 @@ fn diffuse(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
     Ok(Bsdf::Diffuse(Diffuse::new(r.as_vec3())))
 }
 
-/// `twosided` (`src/bsdfs/twosided.cpp`): one nested BSDF for both sides, or two (front,
-/// back). Transmissive models cannot be nested.
-fn twosided(b: &mut Builder<'_>, mut p: Props<'_>, nesting: usize) -> Result<Bsdf, LoadError> {
-    let mut sides = Vec::new();
+// ---------------------------------------------------------------------------------------------
+// Shared parameter groups
+// ---------------------------------------------------------------------------------------------
+
+/// The raw value of parameter `name`, without marking it read (to choose how to read it).
+fn peek<'a>(p: &Props<'a>, name: &str) -> Option<&'a Value> {
+    p.node
+        .props
+        .iter()
+        .find(|x| x.name == name && !matches!(x.value, Value::Object(_)))
+        .map(|x| &x.value)
+}
+
+/// An index of refraction given as a number or one of Mitsuba's names (`lookup_ior` in
+/// `include/mitsuba/render/ior.h`), default `default`.
+fn ior(p: &mut Props<'_>, name: &str, default: &str) -> Result<f32, LoadError> {
+    let pos = p.pos_of(name);
+    let value = match peek(p, name) {
+        Some(Value::String(_)) => {
+            let s = p.string_opt(name)?.unwrap_or(default);
+            lookup_dielectric_ior(s).ok_or_else(|| {
+                let names: Vec<&str> = DIELECTRIC_IORS.iter().map(|(n, _)| *n).collect();
+                p.err_at(
+                    pos,
+                    format!(
+                        "unable to find an IOR value for \"{}\" (\"{name}\"); valid choices are: {}",
+                        s.to_lowercase(),
+                        names.join(", ")
+                    ),
+                )
+            })? as f64
+        }
+        Some(_) => p.float(name, 0.0)?,
+        None => lookup_dielectric_ior(default).expect("default IOR names exist") as f64,
+    };
+    if !value.is_finite() {
+        return Err(p.err_at(pos, format!("\"{name}\" must be finite")));
+    }
+    Ok(value as f32)
+}
+
+/// `int_ior` and `ext_ior`, checked to be positive as Mitsuba does (and to differ where it
+/// asks for that: the rough interfaces).
+fn ior_pair(
+    p: &mut Props<'_>,
+    int_default: &str,
+    must_differ: bool,
+) -> Result<(f32, f32), LoadError> {
+    let int_ior = ior(p, "int_ior", int_default)?;
+    let ext_ior = ior(p, "ext_ior", "air")?;
+    if int_ior < 0.0 || ext_ior < 0.0 || (must_differ && int_ior == ext_ior) {
+        let what = if must_differ {
+            "must be positive and differ"
+        } else {
+            "must be positive"
+        };
+        return Err(p.err(format!(
+            "the interior and exterior indices of refraction {what} (int_ior {int_ior}, ext_ior {ext_ior})"
+        )));
+    }
+    // Zero is allowed by Mitsuba's check but makes no interface.
+    if int_ior == 0.0 || ext_ior == 0.0 {
+        return Err(p.err(format!(
+            "the indices of refraction must be positive (int_ior {int_ior}, ext_ior {ext_ior})"
+        )));
+    }
+    Ok((int_ior, ext_ior))
+}
+
+/// A conductor's complex IOR: `eta`/`k` (defaults 0 and 1) or a `material` preset, default
+/// "none" (= eta 0, k 1: F = 1), as `conductor.cpp`/`roughconductor.cpp`.
+fn complex_ior(p: &mut Props<'_>) -> Result<(Vec3, Vec3), LoadError> {
+    let material_pos = p.pos_of("material");
+    let material = p.string_opt("material")?.unwrap_or("none");
+    if p.has("eta") || material == "none" {
+        let eta = p.color("eta", 0.0, false)?;
+        let k = p.color("k", 1.0, false)?;
+        if material != "none" {
+            return Err(p.err_at(
+                material_pos,
+                "should specify either (eta, k) or material, not both",
+            ));
+        }
+        return Ok((eta.as_vec3(), k.as_vec3()));
+    }
+    match lookup_conductor(material) {
+        Some(preset) => Ok((preset.eta.into(), preset.k.into())),
+        None => {
+            let names: Vec<&str> = CONDUCTOR_PRESETS.iter().map(|c| c.name).collect();
+            Err(p.err_at(
+                material_pos,
+                format!(
+                    "unknown conductor material \"{material}\"; radia knows Mitsuba 3.9.1's: none, {}",
+                    names.join(", ")
+                ),
+            ))
+        }
+    }
+}
+
+/// `distribution` ("beckmann" or "ggx", case-insensitive; `default` when absent).
+fn distribution_type(
+    p: &mut Props<'_>,
+    default: MicrofacetType,
+) -> Result<MicrofacetType, LoadError> {
+    let pos = p.pos_of("distribution");
+    match p.string_opt("distribution")? {
+        None => Ok(default),
+        Some(s) => match s.to_lowercase().as_str() {
+            "beckmann" => Ok(MicrofacetType::Beckmann),
+            "ggx" => Ok(MicrofacetType::Ggx),
+            other => Err(p.err_at(
+                pos,
+                format!("specified an invalid distribution \"{other}\", must be \"beckmann\" or \"ggx\""),
+            )),
+        },
+    }
+}
+
+/// `alpha` (default 0.1), or both `alpha_u` and `alpha_v`, as Mitsuba's microfacet plugins
+/// (used as given, clamped to ≥ 10⁻⁴ by the distribution). With `roughness_too`, radia's
+/// `roughness` (glTF's: α = roughness²) is a third alternative.
+fn alphas(p: &mut Props<'_>, roughness_too: bool) -> Result<(f32, f32), LoadError> {
+    let has_uv = p.has("alpha_u") || p.has("alpha_v");
+    let count =
+        p.has("alpha") as u32 + has_uv as u32 + (roughness_too && p.has("roughness")) as u32;
+    if count > 1 {
+        let what = if roughness_too {
+            "either 'alpha', 'alpha_u'/'alpha_v' or 'roughness'"
+        } else {
+            "either 'alpha' or 'alpha_u'/'alpha_v'"
+        };
+        return Err(p.err(format!("microfacet model: please specify {what}")));
+    }
+    let (au, av) = if has_uv {
+        if !(p.has("alpha_u") && p.has("alpha_v")) {
+            return Err(p.err("microfacet model: both 'alpha_u' and 'alpha_v' must be specified"));
+        }
+        (p.float("alpha_u", 0.1)?, p.float("alpha_v", 0.1)?)
+    } else if roughness_too && p.has("roughness") {
+        let r = p.float("roughness", 0.0)?;
+        (r * r, r * r)
+    } else {
+        let a = p.float("alpha", 0.1)?;
+        (a, a)
+    };
+    if !(au.is_finite() && av.is_finite()) {
+        return Err(p.err("microfacet model: roughness must be finite"));
+    }
+    Ok((au as f32, av as f32))
+}
+
+/// radia's `height_correlated` option (default false: Mitsuba's separable Smith G).
+fn shadowing(p: &mut Props<'_>) -> Result<Shadowing, LoadError> {
+    Ok(if p.boolean("height_correlated", false)? {
+        Shadowing::HeightCorrelated
+    } else {
+        Shadowing::Separable
+    })
+}
+
+fn rgb(c: DVec3) -> Vec3 {
+    c.as_vec3()
+}
+
+// ---------------------------------------------------------------------------------------------
+// Conductors
+// ---------------------------------------------------------------------------------------------
+
+/// `conductor` (`src/bsdfs/conductor.cpp`).
+fn conductor(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+    let spec = p.color("specular_reflectance", 1.0, true)?;
+    let (eta, k) = complex_ior(&mut p)?;
+    p.finish()?;
+    Ok(Bsdf::Conductor(Conductor::new(eta, k, rgb(spec))))
+}
+
+/// `roughconductor` (`src/bsdfs/roughconductor.cpp`): Beckmann by default, α 0.1, visible
+/// normals; radia's `height_correlated` option.
+fn rough_conductor(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+    let (eta, k) = complex_ior(&mut p)?;
+    let kind = distribution_type(&mut p, MicrofacetType::Beckmann)?;
+    let visible = p.boolean("sample_visible", true)?;
+    let (au, av) = alphas(&mut p, false)?;
+    let spec = p.color("specular_reflectance", 1.0, true)?;
+    let g = shadowing(&mut p)?;
+    p.finish()?;
+    let d = MicrofacetDistribution::new(kind, au, av, visible);
+    Ok(Bsdf::RoughConductor(
+        RoughConductor::new(d, eta, k, rgb(spec)).with_shadowing(g),
+    ))
+}
+
+/// radia's `cooktorrance`: GGX by default; `F0`, or glTF's `base_color` (default 0.5) and
+/// `metallic` (default 0, in [0, 1]); `alpha`, `alpha_u`/`alpha_v` or `roughness`.
+fn cook_torrance(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+    let kind = distribution_type(&mut p, MicrofacetType::Ggx)?;
+    let visible = p.boolean("sample_visible", true)?;
+    let (au, av) = alphas(&mut p, true)?;
+    let g = shadowing(&mut p)?;
+    let gltf = p.has("base_color") || p.has("metallic");
+    let fresnel = if p.has("F0") {
+        if gltf {
+            return Err(p.err("cooktorrance: specify either F0 or base_color/metallic, not both"));
+        }
+        CookTorranceFresnel::Schlick {
+            f0: rgb(p.color("F0", 0.04, true)?).into(),
+        }
+    } else {
+        let pos = p.pos_of("metallic");
+        let base_color = rgb(p.color("base_color", 0.5, true)?);
+        let metallic = p.float("metallic", 0.0)?;
+        if !(0.0..=1.0).contains(&metallic) {
+            return Err(p.err_at(
+                pos,
+                format!("cooktorrance: metallic {metallic} must be in [0, 1]"),
+            ));
+        }
+        CookTorranceFresnel::MetallicRoughness {
+            base_color: base_color.into(),
+            metallic: metallic as f32,
+        }
+    };
+    p.finish()?;
+    let d = MicrofacetDistribution::new(kind, au, av, visible);
+    Ok(Bsdf::CookTorrance(CookTorrance::new(d, g, fresnel)))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Dielectrics
+// ---------------------------------------------------------------------------------------------
+
+/// `dielectric` (`src/bsdfs/dielectric.cpp`): bk7 inside, air outside by default.
+fn dielectric(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+    let (int_ior, ext_ior) = ior_pair(&mut p, "bk7", false)?;
+    let r = p.color("specular_reflectance", 1.0, true)?;
+    let t = p.color("specular_transmittance", 1.0, true)?;
+    p.finish()?;
+    let mut m = Dielectric::new(int_ior, ext_ior);
+    m.specular_reflectance = rgb(r).into();
+    m.specular_transmittance = rgb(t).into();
+    Ok(Bsdf::Dielectric(m))
+}
+
+/// `thindielectric` (`src/bsdfs/thindielectric.cpp`).
+fn thin_dielectric(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+    let (int_ior, ext_ior) = ior_pair(&mut p, "bk7", false)?;
+    let r = p.color("specular_reflectance", 1.0, true)?;
+    let t = p.color("specular_transmittance", 1.0, true)?;
+    p.finish()?;
+    let mut m = ThinDielectric::new(int_ior, ext_ior);
+    m.specular_reflectance = rgb(r).into();
+    m.specular_transmittance = rgb(t).into();
+    Ok(Bsdf::ThinDielectric(m))
+}
+
+/// `roughdielectric` (`src/bsdfs/roughdielectric.cpp`): Beckmann, α 0.1, bk7/air.
+fn rough_dielectric(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+    let r = p.color("specular_reflectance", 1.0, true)?;
+    let t = p.color("specular_transmittance", 1.0, true)?;
+    let (int_ior, ext_ior) = ior_pair(&mut p, "bk7", true)?;
+    let kind = distribution_type(&mut p, MicrofacetType::Beckmann)?;
+    let visible = p.boolean("sample_visible", true)?;
+    let (au, av) = alphas(&mut p, false)?;
+    p.finish()?;
+    let d = MicrofacetDistribution::new(kind, au, av, visible);
+    let mut m = RoughDielectric::new(d, int_ior, ext_ior);
+    m.specular_reflectance = rgb(r).into();
+    m.specular_transmittance = rgb(t).into();
+    Ok(Bsdf::RoughDielectric(m))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Plastics
+// ---------------------------------------------------------------------------------------------
+
+/// `plastic` (`src/bsdfs/plastic.cpp`): polypropylene (1.49) in air, diffuse 0.5.
+fn plastic(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+    let (int_ior, ext_ior) = ior_pair(&mut p, "polypropylene", false)?;
+    let d = p.color("diffuse_reflectance", 0.5, true)?;
+    let s = p.color("specular_reflectance", 1.0, true)?;
+    let nonlinear = p.boolean("nonlinear", false)?;
+    p.finish()?;
+    Ok(Bsdf::Plastic(Plastic::new(
+        int_ior,
+        ext_ior,
+        rgb(d),
+        rgb(s),
+        nonlinear,
+    )))
+}
+
+/// `roughplastic` (`src/bsdfs/roughplastic.cpp`): Beckmann α 0.1, isotropic only.
+fn rough_plastic(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+    let (int_ior, ext_ior) = ior_pair(&mut p, "polypropylene", true)?;
+    let d = p.color("diffuse_reflectance", 0.5, true)?;
+    let s = p.color("specular_reflectance", 1.0, true)?;
+    let nonlinear = p.boolean("nonlinear", false)?;
+    let kind = distribution_type(&mut p, MicrofacetType::Beckmann)?;
+    let visible = p.boolean("sample_visible", true)?;
+    let (au, av) = alphas(&mut p, false)?;
+    if au != av {
+        return Err(p.err(
+            "the 'roughplastic' plugin currently does not support anisotropic microfacet distributions",
+        ));
+    }
+    p.finish()?;
+    Ok(Bsdf::RoughPlastic(RoughPlastic::new(
+        kind,
+        au,
+        visible,
+        int_ior,
+        ext_ior,
+        rgb(d),
+        rgb(s),
+        nonlinear,
+    )))
+}
+
+// ---------------------------------------------------------------------------------------------
+// radia's Phong models
+// ---------------------------------------------------------------------------------------------
+
+/// radia's `phong` and `blinnphong`: `diffuse_reflectance` kd (0.5), `specular_reflectance`
+/// ks (0.2), `exponent` n ≥ 0 (30). kd + ks > 1 reflects more than it receives: a warning.
+fn phong(b: &mut Builder<'_>, mut p: Props<'_>, blinn: bool) -> Result<Bsdf, LoadError> {
+    let kd = p.color("diffuse_reflectance", 0.5, true)?;
+    let ks = p.color("specular_reflectance", 0.2, true)?;
+    let pos = p.pos_of("exponent");
+    let n = p.float("exponent", 30.0)?;
+    if !(n >= 0.0 && n.is_finite()) {
+        return Err(p.err_at(pos, format!("exponent {n} must be finite and ≥ 0")));
+    }
+    if (kd + ks).max_element() > 1.0 {
+        b.warnings.push(format!(
+            "{}:{}: {}: diffuse_reflectance + specular_reflectance exceeds 1: the material creates energy",
+            b.doc.file.display(),
+            p.node.pos,
+            p.node.plugin
+        ));
+    }
+    p.finish()?;
+    Ok(if blinn {
+        Bsdf::BlinnPhong(BlinnPhong::new(rgb(kd), rgb(ks), n as f32))
+    } else {
+        Bsdf::Phong(Phong::new(rgb(kd), rgb(ks), n as f32))
+    })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Adapters
+// ---------------------------------------------------------------------------------------------
+
+/// The nested BSDFs of an adapter (at most two), in document order.
+fn nested(
+    b: &mut Builder<'_>,
+    p: &mut Props<'_>,
+    nesting: usize,
+    plugin: &str,
+) -> Result<Vec<(Bsdf, super::TextPos)>, LoadError> {
+    let mut out = Vec::new();
     for (i, n, kind) in p.objects() {
         if kind != Kind::Bsdf {
             continue;
         }
-        if sides.len() == 2 {
+        if out.len() == 2 {
             return Err(p.err_at(
                 p.prop_pos(i),
-                "twosided: at most two nested BSDFs can be specified",
+                format!("{plugin}: at most two nested BSDFs can be specified"),
             ));
         }
         p.take(i);
-        let bsdf = build_bsdf(b, n, nesting + 1)?;
+        out.push((build_bsdf(b, n, nesting + 1)?, p.prop_pos(i)));
+    }
+    Ok(out)
+}
+
+/// `blendbsdf` (`src/bsdfs/blendbsdf.cpp`): `weight` (required, clamped to [0, 1]) and
+/// exactly two nested BSDFs; f = (1 − w) f₀ + w f₁.
+fn blend(b: &mut Builder<'_>, mut p: Props<'_>, nesting: usize) -> Result<Bsdf, LoadError> {
+    let bsdfs = nested(b, &mut p, nesting, "blendbsdf")?;
+    if !p.has("weight") {
+        return Err(p.err("blendbsdf: the parameter \"weight\" is required"));
+    }
+    let w = p.float("weight", 0.0)?;
+    if !w.is_finite() {
+        return Err(p.err_at(p.pos_of("weight"), "blendbsdf: weight must be finite"));
+    }
+    if bsdfs.len() != 2 {
+        return Err(p.err("blendbsdf: two child BSDFs must be specified"));
+    }
+    p.finish()?;
+    let mut it = bsdfs.into_iter().map(|(b, _)| b);
+    let (first, second) = (it.next().unwrap(), it.next().unwrap());
+    Ok(Bsdf::Blend(Blend::new(w as f32, first, second)))
+}
+
+/// `twosided` (`src/bsdfs/twosided.cpp`): one nested BSDF for both sides, or two (front,
+/// back). Transmissive models cannot be nested.
+fn twosided(b: &mut Builder<'_>, mut p: Props<'_>, nesting: usize) -> Result<Bsdf, LoadError> {
+    let sides = nested(b, &mut p, nesting, "twosided")?;
+    for (bsdf, pos) in &sides {
         if bsdf.flags().intersects(LobeFlags::TRANSMISSION) {
             return Err(p.err_at(
-                p.prop_pos(i),
+                *pos,
                 "twosided: only materials without a transmission component can be nested",
             ));
         }
-        sides.push(bsdf);
     }
     if sides.is_empty() {
         return Err(p.err("twosided: a nested one-sided BSDF is required"));
     }
     p.finish()?;
-    // `sides` holds one or two models (checked above).
-    let front = sides[0].clone();
-    let back = sides.get(1).cloned().unwrap_or_else(|| front.clone());
+    let front = sides[0].0.clone();
+    let back = sides.get(1).map_or_else(|| front.clone(), |s| s.0.clone());
     Ok(Bsdf::TwoSided(TwoSided::new(front, back)))
+}
+
+#[cfg(test)]
+mod tests {
+    //! The BSDF plugins' parameters: defaults, alternatives and errors. (Loading whole
+    //! scenes is tested in `loader/tests.rs`.)
+    use crate::loader::load_mitsuba_xml_with_warnings;
+    use crate::SceneDescription;
+    use glam::{Vec2, Vec3};
+    use radia_bsdf::{Bsdf, ShadingPoint};
+
+    /// A scene with one sphere whose BSDF is `bsdf` (XML), loaded from a temporary file.
+    fn load(bsdf: &str) -> Result<(SceneDescription, Vec<String>), String> {
+        let xml = format!(
+            r#"<scene version="3.0.0">
+<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
+<shape type="sphere">{bsdf}</shape>
+</scene>"#
+        );
+        let dir = std::env::temp_dir().join(format!("radia-bsdf-loader-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let path = dir.join(format!("t{n}.xml"));
+        std::fs::write(&path, xml).unwrap();
+        let r = load_mitsuba_xml_with_warnings(&path, &[]).map_err(|e| e.to_string());
+        let _ = std::fs::remove_file(&path);
+        r
+    }
+
+    static COUNTER: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+    fn bsdf(xml: &str) -> Bsdf {
+        match load(xml) {
+            Ok((s, _)) => s.shapes[0].bsdf.clone(),
+            Err(e) => panic!("{xml}: {e}"),
+        }
+    }
+
+    #[track_caller]
+    fn load_err(xml: &str, needle: &str) {
+        match load(xml) {
+            Ok(_) => panic!("{xml} loaded, expected an error containing {needle:?}"),
+            Err(e) => assert!(e.contains(needle), "{xml}: error {e:?} lacks {needle:?}"),
+        }
+    }
+
+    const SP: ShadingPoint = ShadingPoint { uv: Vec2::ZERO };
+
+    #[test]
+    fn loader_bsdfs_conductors() {
+        let Bsdf::RoughConductor(r) = bsdf(r#"<bsdf type="roughconductor"/>"#) else {
+            panic!()
+        };
+        // Mitsuba's defaults: Beckmann, α 0.1, visible normals, material "none".
+        assert_eq!(
+            r.distribution,
+            radia_bsdf::MicrofacetDistribution::new(
+                radia_bsdf::MicrofacetType::Beckmann,
+                0.1,
+                0.1,
+                true
+            )
+        );
+        assert_eq!((r.eta, r.k), (Vec3::ZERO, Vec3::ONE));
+        let Bsdf::RoughConductor(r) = bsdf(
+            r#"<bsdf type="roughconductor"><string name="distribution" value="GGX"/><float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.3"/><string name="material" value="Au"/><boolean name="sample_visible" value="false"/></bsdf>"#,
+        ) else {
+            panic!()
+        };
+        assert_eq!(r.distribution.kind, radia_bsdf::MicrofacetType::Ggx);
+        assert_eq!(
+            (
+                r.distribution.alpha_u,
+                r.distribution.alpha_v,
+                r.distribution.sample_visible
+            ),
+            (0.05, 0.3, false)
+        );
+        assert!((r.eta.x - 0.143036).abs() < 1e-5 && (r.k.z - 1.60336).abs() < 1e-5);
+        let Bsdf::RoughConductor(r) = bsdf(
+            r#"<bsdf type="roughconductor"><rgb name="eta" value="0.2, 0.9, 1.1"/><float name="k" value="3"/></bsdf>"#,
+        ) else {
+            panic!()
+        };
+        assert_eq!((r.eta, r.k), (Vec3::new(0.2, 0.9, 1.1), Vec3::splat(3.0)));
+        let Bsdf::Conductor(c) = bsdf(
+            r#"<bsdf type="conductor"><string name="material" value="Cu"/><rgb name="specular_reflectance" value="0.5"/></bsdf>"#,
+        ) else {
+            panic!()
+        };
+        assert!((c.k.x - 3.91326).abs() < 1e-5);
+        let s = Bsdf::Conductor(c)
+            .sample(&SP, Vec3::Z, 0.5, Vec2::splat(0.5))
+            .unwrap();
+        assert!(s.weight.max_element() <= 0.5);
+
+        load_err(
+            r#"<bsdf type="conductor"><string name="material" value="Au"/><float name="eta" value="1"/></bsdf>"#,
+            "not both",
+        );
+        load_err(
+            r#"<bsdf type="conductor"><string name="material" value="Unobtainium"/></bsdf>"#,
+            "unknown conductor material",
+        );
+        load_err(
+            r#"<bsdf type="roughconductor"><float name="alpha" value="0.1"/><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.1"/></bsdf>"#,
+            "either 'alpha'",
+        );
+        load_err(
+            r#"<bsdf type="roughconductor"><float name="alpha_u" value="0.1"/></bsdf>"#,
+            "both 'alpha_u' and 'alpha_v'",
+        );
+        load_err(
+            r#"<bsdf type="roughconductor"><string name="distribution" value="phong"/></bsdf>"#,
+            "invalid distribution",
+        );
+        load_err(
+            r#"<bsdf type="roughconductor"><float name="alpah" value="0.1"/></bsdf>"#,
+            "alpah",
+        );
+        load_err(
+            r#"<bsdf type="roughconductor"><rgb name="specular_reflectance" value="2"/></bsdf>"#,
+            "range [0, 1]",
+        );
+    }
+
+    #[test]
+    fn loader_bsdfs_dielectrics() {
+        let Bsdf::Dielectric(d) = bsdf(r#"<bsdf type="dielectric"/>"#) else {
+            panic!()
+        };
+        // bk7 inside, air (1.000277) outside.
+        assert!((d.eta - 1.5046 / 1.000277).abs() < 1e-6);
+        let Bsdf::Dielectric(d) = bsdf(
+            r#"<bsdf type="dielectric"><string name="int_ior" value="Water"/><float name="ext_ior" value="1"/></bsdf>"#,
+        ) else {
+            panic!()
+        };
+        assert_eq!(d.eta, 1.333);
+        let Bsdf::ThinDielectric(t) = bsdf(
+            r#"<bsdf type="thindielectric"><float name="int_ior" value="1.5"/><float name="ext_ior" value="1"/></bsdf>"#,
+        ) else {
+            panic!()
+        };
+        assert_eq!(t.eta, 1.5);
+        let Bsdf::RoughDielectric(r) = bsdf(
+            r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="alpha" value="0.3"/><string name="int_ior" value="diamond"/></bsdf>"#,
+        ) else {
+            panic!()
+        };
+        assert!((r.eta - 2.419 / 1.000277).abs() < 1e-6);
+        assert_eq!(r.distribution.alpha_u, 0.3);
+
+        load_err(
+            r#"<bsdf type="dielectric"><string name="int_ior" value="glass"/></bsdf>"#,
+            "unable to find an IOR value for \"glass\"",
+        );
+        load_err(
+            r#"<bsdf type="dielectric"><float name="int_ior" value="-1"/></bsdf>"#,
+            "must be positive",
+        );
+        load_err(
+            r#"<bsdf type="roughdielectric"><float name="int_ior" value="1.2"/><float name="ext_ior" value="1.2"/></bsdf>"#,
+            "must be positive and differ",
+        );
+        // Transmissive models cannot be two-sided.
+        load_err(
+            r#"<bsdf type="twosided"><bsdf type="dielectric"/></bsdf>"#,
+            "transmission",
+        );
+        load_err(
+            r#"<bsdf type="twosided"><bsdf type="thindielectric"/></bsdf>"#,
+            "transmission",
+        );
+    }
+
+    #[test]
+    fn loader_bsdfs_plastics_and_adapters() {
+        let Bsdf::Plastic(p) = bsdf(r#"<bsdf type="plastic"/>"#) else {
+            panic!()
+        };
+        assert!((p.eta - 1.49 / 1.000277).abs() < 1e-6);
+        let Bsdf::RoughPlastic(r) = bsdf(
+            r#"<bsdf type="roughplastic"><string name="distribution" value="ggx"/><float name="alpha" value="0.2"/><float name="int_ior" value="1.5"/><float name="ext_ior" value="1"/></bsdf>"#,
+        ) else {
+            panic!()
+        };
+        // The table Mitsuba 3.9.1 computes for these parameters (MITSUBA-SEMANTICS.md).
+        assert!((r.internal_reflectance() - 0.4863).abs() < 5e-4);
+        load_err(
+            r#"<bsdf type="roughplastic"><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.2"/></bsdf>"#,
+            "anisotropic",
+        );
+
+        let Bsdf::Blend(b) = bsdf(
+            r#"<bsdf type="blendbsdf"><float name="weight" value="0.3"/><bsdf type="diffuse"/><bsdf type="roughconductor"/></bsdf>"#,
+        ) else {
+            panic!()
+        };
+        assert_eq!(b.weight, 0.3);
+        assert!(
+            matches!(b.bsdfs[0], Bsdf::Diffuse(_)) && matches!(b.bsdfs[1], Bsdf::RoughConductor(_))
+        );
+        let Bsdf::Blend(b) = bsdf(
+            r#"<bsdf type="blendbsdf"><float name="weight" value="1.5"/><bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf>"#,
+        ) else {
+            panic!()
+        };
+        assert_eq!(b.weight, 1.0);
+        load_err(
+            r#"<bsdf type="blendbsdf"><bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf>"#,
+            "\"weight\" is required",
+        );
+        load_err(
+            r#"<bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="diffuse"/></bsdf>"#,
+            "two child BSDFs",
+        );
+        load_err(
+            r#"<bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="diffuse"/><bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf>"#,
+            "at most two",
+        );
+
+        let Bsdf::TwoSided(t) = bsdf(
+            r#"<bsdf type="twosided"><bsdf type="roughconductor"/><bsdf type="diffuse"/></bsdf>"#,
+        ) else {
+            panic!()
+        };
+        assert!(
+            matches!(t.sides[0], Bsdf::RoughConductor(_)) && matches!(t.sides[1], Bsdf::Diffuse(_))
+        );
+    }
+
+    #[test]
+    fn loader_bsdfs_radia_models() {
+        let Bsdf::Phong(p) =
+            bsdf(r#"<bsdf type="phong"><float name="exponent" value="12"/></bsdf>"#)
+        else {
+            panic!()
+        };
+        assert_eq!(p.exponent, 12.0);
+        let Bsdf::BlinnPhong(p) = bsdf(r#"<bsdf type="blinnphong"/>"#) else {
+            panic!()
+        };
+        assert_eq!(p.exponent, 30.0);
+        load_err(
+            r#"<bsdf type="phong"><float name="exponent" value="-1"/></bsdf>"#,
+            "exponent",
+        );
+        let (_, warnings) = load(r#"<bsdf type="phong"><float name="diffuse_reflectance" value="0.9"/><float name="specular_reflectance" value="0.5"/></bsdf>"#).unwrap();
+        assert!(
+            warnings.iter().any(|w| w.contains("creates energy")),
+            "{warnings:?}"
+        );
+
+        let Bsdf::CookTorrance(c) = bsdf(
+            r#"<bsdf type="cooktorrance"><float name="roughness" value="0.5"/><rgb name="base_color" value="0.9, 0.6, 0.3"/><float name="metallic" value="1"/></bsdf>"#,
+        ) else {
+            panic!()
+        };
+        // glTF: α = roughness², GGX.
+        assert_eq!(c.distribution().alpha_u, 0.25);
+        assert_eq!(c.distribution().kind, radia_bsdf::MicrofacetType::Ggx);
+        let Bsdf::CookTorrance(c) = bsdf(
+            r#"<bsdf type="cooktorrance"><rgb name="F0" value="0.9"/><boolean name="height_correlated" value="true"/></bsdf>"#,
+        ) else {
+            panic!()
+        };
+        assert_eq!(
+            c.shadowing(),
+            radia_bsdf::microfacet::Shadowing::HeightCorrelated
+        );
+        load_err(
+            r#"<bsdf type="cooktorrance"><rgb name="F0" value="0.9"/><float name="metallic" value="1"/></bsdf>"#,
+            "not both",
+        );
+        load_err(
+            r#"<bsdf type="cooktorrance"><float name="metallic" value="2"/></bsdf>"#,
+            "[0, 1]",
+        );
+        load_err(
+            r#"<bsdf type="cooktorrance"><float name="alpha" value="0.1"/><float name="roughness" value="0.1"/></bsdf>"#,
+            "either 'alpha'",
+        );
+        load_err(
+            r#"<bsdf type="velvet"/>"#,
+            "unsupported BSDF plugin type \"velvet\"",
+        );
+    }
 }
