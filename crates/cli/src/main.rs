@@ -7,7 +7,7 @@
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use radia_render::{image_io::write_image, render, RenderOptions};
-use radia_scene::{load_mitsuba_xml, Scene};
+use radia_scene::{load_mitsuba_xml, LightSamplerKind, Scene};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -49,6 +49,10 @@ enum Command {
         /// No progress bar.
         #[arg(short, long)]
         quiet: bool,
+        /// How next-event estimation chooses a light: uniform (Mitsuba's choice), power, or
+        /// bvh (a light BVH that accounts for distance and orientation; the default).
+        #[arg(long, value_name = "uniform|power|bvh")]
+        light_sampler: Option<LightSamplerKind>,
     },
 }
 
@@ -72,6 +76,7 @@ fn run(cli: Cli) -> Result<(), String> {
         seed,
         define,
         quiet,
+        light_sampler,
     } = cli.command;
     let defines = define
         .iter()
@@ -107,7 +112,10 @@ fn run(cli: Cli) -> Result<(), String> {
 
     let t_load = Instant::now();
     let desc = load_mitsuba_xml(&scene_path, &defines).map_err(|e| e.to_string())?;
-    let scene = Scene::build(desc);
+    let mut scene = Scene::build(desc);
+    if let Some(kind) = light_sampler {
+        scene.set_light_sampler(kind);
+    }
     let load_secs = t_load.elapsed().as_secs_f64();
     let options = RenderOptions {
         spp: spp.unwrap_or(scene.sampler.sample_count).max(1),

@@ -6,7 +6,7 @@ use glam::Vec3;
 use radia_bsdf::ShadingPoint;
 use radia_math::{max_component, Ray, Spectrum};
 use radia_sampling::{mis::power_heuristic, Sampler};
-use radia_scene::{Scene, SurfaceInteraction};
+use radia_scene::{LightContext, Scene, SurfaceInteraction};
 
 /// Counters a render thread accumulates.
 #[derive(Clone, Copy, Debug, Default)]
@@ -22,14 +22,17 @@ pub struct PathIntegrator {
     max_depth: u32,
     rr_depth: u32,
     hide_emitters: bool,
-    /// Probability of choosing each emitter for next-event estimation (uniform, as Mitsuba).
-    emitter_pmf: f32,
+    /// Next-event estimation has something to sample (`scene.lights`, which also decides
+    /// which light: radia's light BVH by default, Mitsuba's uniform choice on request).
+    has_lights: bool,
 }
 
 /// Where the previous bounce left from, for MIS on emitters hit by BSDF sampling.
 #[derive(Clone, Copy)]
 struct PrevVertex {
     p: Vec3,
+    /// Shading normal there: the light BVH's choice depends on it.
+    n: Vec3,
     bsdf_pdf: f32,
     bsdf_delta: bool,
 }
@@ -37,7 +40,6 @@ struct PrevVertex {
 impl PathIntegrator {
     pub fn new(scene: &Scene) -> Self {
         let cfg = &scene.integrator;
-        let n = scene.emitters.len();
         Self {
             max_depth: if cfg.max_depth < 0 {
                 u32::MAX
@@ -46,7 +48,7 @@ impl PathIntegrator {
             },
             rr_depth: cfg.rr_depth.max(0) as u32,
             hide_emitters: cfg.hide_emitters,
-            emitter_pmf: if n > 0 { 1.0 / n as f32 } else { 0.0 },
+            has_lights: !scene.lights.is_empty(),
         }
     }
 
@@ -65,6 +67,7 @@ impl PathIntegrator {
         // A camera ray counts as "delta" so that emitters it sees directly get full weight.
         let mut prev = PrevVertex {
             p: ray.o,
+            n: Vec3::ZERO,
             bsdf_pdf: 1.0,
             bsdf_delta: true,
         };
@@ -74,8 +77,13 @@ impl PathIntegrator {
 
         loop {
             stats.rays += 1;
-            let Some(si) = scene.intersect(&ray) else {
-                // ---- Escaped: environment emission ----
+            let mut hit = scene.intersect(&ray);
+            if self.hide_emitters && depth == 0 {
+                hit = skip_area_emitters(scene, &mut ray, hit, stats);
+            }
+            let Some(si) = hit else {
+                // ---- Escaped: environment emission (none without an environment) ----
+                // With hide_emitters an escaped camera ray gives 0 (path.cpp's `valid_ray`).
                 if let Some(env) = scene.environment {
                     if !(self.hide_emitters && depth == 0) {
                         let emitter = &scene.emitters[env as usize];
@@ -88,13 +96,12 @@ impl PathIntegrator {
             };
 
             // ---- Emission of the surface that was hit ----
+            // (With hide_emitters, camera rays never stop at an emitter: see above.)
             if let Some((ei, emitter)) = scene.surface_emitter(&si) {
-                if !(self.hide_emitters && depth == 0) {
-                    let le = emitter.eval_surface(&si);
-                    if le != Spectrum::ZERO {
-                        let w = self.mis_emitter_hit(scene, ei, Some(&si), ray.d, &prev);
-                        result += beta * le * w;
-                    }
+                let le = emitter.eval_surface(&si);
+                if le != Spectrum::ZERO {
+                    let w = self.mis_emitter_hit(scene, ei, Some(&si), ray.d, &prev);
+                    result += beta * le * w;
                 }
             }
 
@@ -106,7 +113,7 @@ impl PathIntegrator {
             let sp = ShadingPoint { uv: si.uv };
 
             // ---- Emitter sampling (next-event estimation) ----
-            if bsdf.flags().has_smooth() && self.emitter_pmf > 0.0 {
+            if bsdf.flags().has_smooth() && self.has_lights {
                 result += beta * self.sample_emitter(scene, &si, &sp, bsdf, sampler, stats);
             }
 
@@ -124,6 +131,7 @@ impl PathIntegrator {
             eta *= bs.eta;
             prev = PrevVertex {
                 p: si.p,
+                n: si.frame.n,
                 bsdf_pdf: bs.pdf,
                 bsdf_delta: bs.lobe.is_delta(),
             };
@@ -146,7 +154,8 @@ impl PathIntegrator {
         result
     }
 
-    /// MIS weight of emission found by BSDF sampling from `prev`.
+    /// MIS weight of emission found by BSDF sampling from `prev`: the emitter's density
+    /// includes the probability that light selection picks it from there.
     #[inline]
     fn mis_emitter_hit(
         &self,
@@ -159,12 +168,16 @@ impl PathIntegrator {
         if prev.bsdf_delta {
             return 1.0;
         }
-        let pdf_em = self.emitter_pmf
-            * scene.emitters[emitter as usize].pdf_direction(&scene.shapes, prev.p, si, d);
+        let ctx = LightContext {
+            p: prev.p,
+            n: prev.n,
+        };
+        let pdf_em = scene.pdf_emitter_direction(&ctx, emitter, si, d);
         power_heuristic(prev.bsdf_pdf, pdf_em)
     }
 
     /// One next-event estimation sample: L·f·cos / pdf with the MIS weight, unoccluded or 0.
+    /// Delta lights need no MIS (BSDF sampling never finds them), so no BSDF pdf either.
     #[inline]
     fn sample_emitter(
         &self,
@@ -177,32 +190,52 @@ impl PathIntegrator {
     ) -> Spectrum {
         let u_sel = sampler.next_1d();
         let u = sampler.next_2d();
-        let n = scene.emitters.len();
-        let index = ((u_sel * n as f32) as usize).min(n - 1);
-        let emitter = &scene.emitters[index];
-        let Some(es) = emitter.sample_direction(&scene.shapes, si.p, u) else {
+        let ctx = LightContext {
+            p: si.p,
+            n: si.frame.n,
+        };
+        let Some(es) = scene.sample_emitter_direction(&ctx, u_sel, u) else {
             return Spectrum::ZERO;
         };
         let wo = si.frame.to_local(es.d);
-        let (f, bsdf_pdf) = bsdf.eval_pdf(sp, si.wi, wo);
+        let (f, w) = if es.is_delta {
+            (bsdf.eval(sp, si.wi, wo), 1.0)
+        } else {
+            let (f, bsdf_pdf) = bsdf.eval_pdf(sp, si.wi, wo);
+            (f, power_heuristic(es.pdf, bsdf_pdf))
+        };
         if f == Spectrum::ZERO {
             return Spectrum::ZERO;
         }
         let shadow = if es.dist.is_finite() {
             si.spawn_ray_to(es.p)
         } else {
-            si.spawn_ray(es.d)
+            si.spawn_ray_towards_infinity(es.d)
         };
         stats.rays += 1;
         if scene.occluded(&shadow) {
             return Spectrum::ZERO;
         }
-        let pdf_light = es.pdf * self.emitter_pmf;
-        let w = if es.is_delta {
-            1.0
-        } else {
-            power_heuristic(pdf_light, bsdf_pdf)
-        };
-        f * es.radiance * (w / pdf_light)
+        f * es.radiance * (w / es.pdf)
     }
+}
+
+/// Mitsuba's `skip_area_emitters` (`src/render/integrator.cpp`) for `hide_emitters`: a camera
+/// ray that meets a shape with an area emitter (either side) continues through it, from the
+/// hit point in the same direction, until it meets something else or leaves the scene.
+fn skip_area_emitters(
+    scene: &Scene,
+    ray: &mut Ray,
+    mut hit: Option<SurfaceInteraction>,
+    stats: &mut PathStats,
+) -> Option<SurfaceInteraction> {
+    while let Some(si) = hit {
+        if scene.surface_emitter(&si).is_none() {
+            return Some(si);
+        }
+        *ray = si.spawn_ray(ray.d);
+        stats.rays += 1;
+        hit = scene.intersect(ray);
+    }
+    None
 }

@@ -106,11 +106,54 @@ pub struct ShapeDesc {
     pub origin: String,
 }
 
-/// Emitters that are not attached to a shape.
+/// Emitters that are not attached to a shape (`src/emitters/*.cpp`; see
+/// [`crate::emitter`] for each one's semantics).
 #[derive(Clone, Debug, PartialEq)]
 pub enum EmitterDesc {
     /// `constant`: the same radiance from every direction, visible as the background.
     Constant { radiance: Spectrum },
+    /// `envmap`: a latitude-longitude image at infinity, times `scale`; `to_world` is a
+    /// rotation.
+    Envmap {
+        image: RgbImage,
+        scale: f32,
+        to_world: Affine3A,
+        mis_compensation: bool,
+    },
+    /// `point`: `intensity` (W/sr) from `position`.
+    Point { position: Vec3, intensity: Spectrum },
+    /// `spot`: from the origin of `to_world` along its +z; angles in degrees. A
+    /// `falloff_exponent` (radia extension) replaces Mitsuba's linear falloff by cos^e.
+    Spot {
+        to_world: Affine3A,
+        intensity: Spectrum,
+        cutoff_angle: f32,
+        beam_width: f32,
+        falloff_exponent: Option<f32>,
+    },
+    /// `directional`: `irradiance` (W/m²) arriving along the unit `direction` of travel.
+    Directional {
+        direction: Vec3,
+        irradiance: Spectrum,
+    },
+}
+
+impl EmitterDesc {
+    /// Seen by rays that leave the scene (`constant`, `envmap`): a scene has at most one.
+    pub fn is_environment(&self) -> bool {
+        matches!(
+            self,
+            EmitterDesc::Constant { .. } | EmitterDesc::Envmap { .. }
+        )
+    }
+}
+
+/// A linear RGB image, row-major with row 0 at the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbImage {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<Spectrum>,
 }
 
 /// Everything needed to render one image.

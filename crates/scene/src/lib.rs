@@ -5,13 +5,16 @@ pub mod accel;
 pub mod camera;
 pub mod description;
 pub mod emitter;
+pub mod lights;
 pub mod loader;
 pub mod shape;
+mod spherical;
 
 pub use accel::Accel;
 pub use camera::{look_at, Camera};
 pub use description::*;
 pub use emitter::{Emitter, EmitterSample};
+pub use lights::{LightContext, LightSamplerKind, Lights};
 pub use loader::{load_mitsuba_xml, LoadError};
 pub use shape::{Shape, SurfaceInteraction};
 
@@ -36,6 +39,9 @@ pub struct Scene {
     pub emitters: Vec<Emitter>,
     /// The emitter seen by rays that leave the scene, if any.
     pub environment: Option<u32>,
+    /// Light selection for next-event estimation (radia's default strategy unless
+    /// [`Scene::set_light_sampler`] chose another).
+    pub lights: Lights,
     accel: Accel,
 }
 
@@ -46,24 +52,29 @@ impl Scene {
         let mut emitters = Vec::new();
         for (i, s) in desc.shapes.into_iter().enumerate() {
             let emitter = s.emission.map(|radiance| {
-                emitters.push(Emitter::Area {
+                emitters.push(Emitter::Area(emitter::AreaLight {
                     shape: i as u32,
                     radiance,
-                });
+                }));
                 (emitters.len() - 1) as u32
             });
             bsdfs.push(s.bsdf);
             shapes.push(Shape::new(s.geometry, i as u32, emitter));
         }
         let mut environment = None;
-        for e in desc.emitters {
-            match e {
-                EmitterDesc::Constant { radiance } => {
-                    emitters.push(Emitter::Constant { radiance });
-                    environment = Some((emitters.len() - 1) as u32);
-                }
+        for e in &desc.emitters {
+            let e = Emitter::from_desc(e);
+            if e.is_environment() {
+                environment = Some(emitters.len() as u32);
             }
+            emitters.push(e);
         }
+        let lights = Lights::build(
+            LightSamplerKind::default(),
+            &emitters,
+            &shapes,
+            lights::scene_sphere(&shapes),
+        );
         let accel = Accel::build(&shapes);
         Self {
             camera: Camera::new(&desc.camera, desc.film.width, desc.film.height),
@@ -74,6 +85,7 @@ impl Scene {
             bsdfs,
             emitters,
             environment,
+            lights,
             accel,
         }
     }

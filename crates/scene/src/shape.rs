@@ -1,11 +1,13 @@
 //! Shapes as the renderer sees them: geometry in world space, the surface interaction at a
-//! hit, and uniform sampling of points by area (what area lights need).
+//! hit, and the sampling of points on them that area lights need (by solid angle where it can
+//! be done: spheres seen from outside, triangles of reasonable solid angle; else by area).
 
 use crate::accel::{Hit, Primitive};
 use crate::description::{Geometry, Mesh};
+use crate::spherical::{sample_spherical_triangle, triangle_solid_angle};
 use glam::{Affine3A, Vec2, Vec3};
 use radia_math::{Frame, INV_TWO_PI, PI};
-use radia_sampling::{warp, DiscreteDistribution};
+use radia_sampling::warp;
 
 #[derive(Clone, Debug)]
 pub enum ShapeKind {
@@ -31,8 +33,6 @@ pub struct Shape {
     pub emitter: Option<u32>,
     /// Total surface area.
     pub area: f32,
-    /// Triangle selection proportional to area (meshes that emit only).
-    area_distribution: Option<DiscreteDistribution>,
 }
 
 /// A point on a surface reached by a ray: the local geometry the integrator shades with.
@@ -46,6 +46,9 @@ pub struct SurfaceInteraction {
     pub frame: Frame,
     pub uv: Vec2,
     pub shape: u32,
+    /// Triangle index within a mesh (0 on analytic shapes): which light primitive of an
+    /// emitting shape was hit.
+    pub face: u32,
     /// Direction back along the incoming ray, in the shading frame (Mitsuba's `si.wi`).
     pub wi: Vec3,
 }
@@ -65,20 +68,14 @@ fn triangle_area(p: &[Vec3; 3]) -> f32 {
 
 impl Shape {
     pub fn new(geometry: Geometry, bsdf: u32, emitter: Option<u32>) -> Self {
-        let (kind, area, area_distribution) = match geometry {
+        let (kind, area) = match geometry {
             Geometry::Mesh(mesh) => {
-                let areas: Vec<f32> = mesh
+                let area = mesh
                     .indices
                     .iter()
-                    .map(|idx| triangle_area(&idx.map(|i| mesh.positions[i as usize])))
-                    .collect();
-                let area = areas.iter().map(|&a| a as f64).sum::<f64>() as f32;
-                let dist = if emitter.is_some() {
-                    DiscreteDistribution::new(&areas)
-                } else {
-                    None
-                };
-                (ShapeKind::Mesh(mesh), area, dist)
+                    .map(|idx| triangle_area(&idx.map(|i| mesh.positions[i as usize])) as f64)
+                    .sum::<f64>() as f32;
+                (ShapeKind::Mesh(mesh), area)
             }
             Geometry::Sphere {
                 center,
@@ -91,7 +88,6 @@ impl Shape {
                     flip_normals,
                 },
                 4.0 * PI * radius * radius,
-                None,
             ),
             Geometry::Disk {
                 to_world,
@@ -116,7 +112,6 @@ impl Shape {
                         flip_normals,
                     },
                     area,
-                    None,
                 )
             }
         };
@@ -125,7 +120,6 @@ impl Shape {
             bsdf,
             emitter,
             area,
-            area_distribution,
         }
     }
 
@@ -137,9 +131,11 @@ impl Shape {
         ray_o: Vec3,
         d: Vec3,
     ) -> SurfaceInteraction {
+        let mut face = 0;
         let (p, n, sh_n, dpdu, uv) = match (&self.kind, prim) {
-            (ShapeKind::Mesh(mesh), Primitive::Triangle { p: v, face, .. }) => {
-                let idx = mesh.indices[*face as usize];
+            (ShapeKind::Mesh(mesh), Primitive::Triangle { p: v, face: f, .. }) => {
+                face = *f;
+                let idx = mesh.indices[face as usize];
                 let (b1, b2) = (hit.bary.x, hit.bary.y);
                 let b0 = 1.0 - b1 - b2;
                 let p = v[0] * b0 + v[1] * b1 + v[2] * b2;
@@ -244,29 +240,39 @@ impl Shape {
             frame,
             uv,
             shape: prim.shape(),
+            face,
             wi: frame.to_local(-d),
         }
     }
 
-    /// A point uniformly distributed over the surface (density 1/area).
-    pub fn sample_position(&self, u: Vec2) -> PositionSample {
-        let pdf = 1.0 / self.area;
+    /// Light primitives of the shape: its triangles (meshes) or the whole surface.
+    pub fn part_count(&self) -> u32 {
+        match &self.kind {
+            ShapeKind::Mesh(mesh) => mesh.indices.len() as u32,
+            _ => 1,
+        }
+    }
+
+    /// Area of light primitive `face`: one triangle of a mesh, else the whole surface.
+    pub fn part_area(&self, face: u32) -> f32 {
+        match &self.kind {
+            ShapeKind::Mesh(mesh) => triangle_area(&mesh_triangle(mesh, face)),
+            _ => self.area,
+        }
+    }
+
+    /// A point uniformly distributed over light primitive `face` (density 1 / its area).
+    pub fn sample_position(&self, face: u32, u: Vec2) -> PositionSample {
         match &self.kind {
             ShapeKind::Mesh(mesh) => {
-                let dist = self
-                    .area_distribution
-                    .as_ref()
-                    .expect("emitting meshes have an area distribution");
-                let s = dist.sample(u.x);
-                let idx = mesh.indices[s.index];
-                let v = idx.map(|i| mesh.positions[i as usize]);
-                let b = warp::square_to_uniform_triangle(Vec2::new(s.u_remapped, u.y));
+                let v = mesh_triangle(mesh, face);
+                let b = warp::square_to_uniform_triangle(u);
                 let p = v[0] * (1.0 - b.x - b.y) + v[1] * b.x + v[2] * b.y;
-                let mut n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
-                if mesh.flip_normals {
-                    n = -n;
+                PositionSample {
+                    p,
+                    n: mesh_normal(mesh, &v),
+                    pdf: 1.0 / triangle_area(&v),
                 }
-                PositionSample { p, n, pdf }
             }
             ShapeKind::Sphere {
                 center,
@@ -278,7 +284,7 @@ impl Shape {
                 PositionSample {
                     p: *center + local * *radius,
                     n,
-                    pdf,
+                    pdf: 1.0 / self.area,
                 }
             }
             ShapeKind::Disk {
@@ -290,58 +296,61 @@ impl Shape {
                 let q = warp::square_to_uniform_disk_concentric(u);
                 let p = to_world.transform_point3(Vec3::new(q.x, q.y, 0.0));
                 let n = if *flip_normals { -*normal } else { *normal };
-                PositionSample { p, n, pdf }
+                PositionSample {
+                    p,
+                    n,
+                    pdf: 1.0 / self.area,
+                }
             }
         }
     }
 
-    /// A point on the surface for next-event estimation from `ref_p`, with its solid-angle
-    /// pdf seen from there. Spheres seen from outside sample the cone they subtend
-    /// (Mitsuba's `Sphere::sample_direction`); everything else samples area.
-    pub fn sample_direction(&self, ref_p: Vec3, u: Vec2) -> Option<DirectionSample> {
-        if let ShapeKind::Sphere {
-            center,
-            radius,
-            flip_normals,
-        } = &self.kind
-        {
-            let dc = *center - ref_p;
-            let dist2 = dc.length_squared();
-            let r2 = radius * radius;
-            if dist2 > r2 * (1.0 + 1e-4) {
-                let dist = dist2.sqrt();
-                let sin2_max = r2 / dist2;
-                let cos_max = radia_math::safe_sqrt(1.0 - sin2_max);
-                let frame = Frame::from_normal(dc / dist);
-                let local = warp::square_to_uniform_cone(u, cos_max);
-                let d = frame.to_world(local);
-                // Nearest intersection of the sampled direction with the sphere.
-                let cos_theta = local.z;
-                let b = dist * cos_theta;
-                let disc = r2 - (dist2 - b * b);
-                let t = b - radia_math::safe_sqrt(disc);
-                let p = ref_p + d * t;
-                let mut n = (p - *center).normalize();
-                if *flip_normals {
-                    n = -n;
+    /// A point on light primitive `face` for next-event estimation from `ref_p`, with its
+    /// solid-angle density seen from there:
+    ///
+    /// * spheres seen from outside: uniformly in the cone they subtend (as Mitsuba's and
+    ///   pbrt-v4's `Sphere::sample_direction`);
+    /// * triangles: uniformly in the solid angle they subtend (Arvo 1995, after pbrt-v4's
+    ///   `SampleSphericalTriangle`), unless that solid angle is too small or too large for the
+    ///   algorithm to be stable (pbrt-v4's thresholds), then by area;
+    /// * disks, and spheres from inside: by area.
+    pub fn sample_direction(&self, ref_p: Vec3, face: u32, u: Vec2) -> Option<DirectionSample> {
+        match &self.kind {
+            ShapeKind::Sphere {
+                center,
+                radius,
+                flip_normals,
+            } => {
+                if let Some(cone) = SphereCone::new(*center, *radius, ref_p) {
+                    return cone.sample(*center, *radius, *flip_normals, ref_p, u);
                 }
-                let pdf = warp::uniform_cone_pdf(local, cos_max);
-                return Some(DirectionSample {
-                    p,
-                    n,
-                    d,
-                    dist: t,
-                    pdf,
-                });
             }
+            ShapeKind::Mesh(mesh) => {
+                let v = mesh_triangle(mesh, face);
+                let omega = triangle_solid_angle(&v, ref_p);
+                if spherical_sampling(omega) {
+                    let b = sample_spherical_triangle(&v, ref_p, u)?;
+                    let p = v[0] * b[0] + v[1] * b[1] + v[2] * b[2];
+                    let delta = p - ref_p;
+                    let dist = delta.length();
+                    let d = delta / dist;
+                    return d.is_finite().then(|| DirectionSample {
+                        p,
+                        n: mesh_normal(mesh, &v),
+                        d,
+                        dist,
+                        pdf: 1.0 / omega,
+                    });
+                }
+            }
+            ShapeKind::Disk { .. } => {}
         }
-        let ps = self.sample_position(u);
+        let ps = self.sample_position(face, u);
         let delta = ps.p - ref_p;
         let dist2 = delta.length_squared();
         let dist = dist2.sqrt();
         let d = delta / dist;
-        let cos = ps.n.dot(d).abs();
-        let pdf = ps.pdf * dist2 / cos;
+        let pdf = ps.pdf * dist2 / ps.n.dot(d).abs();
         (pdf.is_finite() && pdf > 0.0).then_some(DirectionSample {
             p: ps.p,
             n: ps.n,
@@ -351,21 +360,27 @@ impl Shape {
         })
     }
 
-    /// Solid-angle pdf of [`Shape::sample_direction`] from `ref_p` for the point `p` with
-    /// geometric normal `n`.
-    pub fn pdf_direction(&self, ref_p: Vec3, p: Vec3, n: Vec3) -> f32 {
-        if let ShapeKind::Sphere { center, radius, .. } = &self.kind {
-            let dist2 = (*center - ref_p).length_squared();
-            let r2 = radius * radius;
-            if dist2 > r2 * (1.0 + 1e-4) {
-                let cos_max = radia_math::safe_sqrt(1.0 - r2 / dist2);
-                return INV_TWO_PI / (1.0 - cos_max);
+    /// Solid-angle density of [`Shape::sample_direction`] from `ref_p` returning the point `p`
+    /// with geometric normal `n` on light primitive `face`.
+    pub fn pdf_direction(&self, ref_p: Vec3, face: u32, p: Vec3, n: Vec3) -> f32 {
+        match &self.kind {
+            ShapeKind::Sphere { center, radius, .. } => {
+                if let Some(cone) = SphereCone::new(*center, *radius, ref_p) {
+                    return cone.pdf();
+                }
             }
+            ShapeKind::Mesh(mesh) => {
+                let omega = triangle_solid_angle(&mesh_triangle(mesh, face), ref_p);
+                if spherical_sampling(omega) {
+                    return 1.0 / omega;
+                }
+            }
+            ShapeKind::Disk { .. } => {}
         }
         let delta = p - ref_p;
         let dist2 = delta.length_squared();
         let cos = n.dot(delta).abs() / dist2.sqrt();
-        let pdf = dist2 / (cos * self.area);
+        let pdf = dist2 / (cos * self.part_area(face));
         if pdf.is_finite() {
             pdf
         } else {
@@ -374,10 +389,110 @@ impl Shape {
     }
 }
 
+/// pbrt-v4's bounds (`src/pbrt/shapes.h`, `Triangle`): below 3·10⁻⁴ sr the spherical
+/// triangle sampler loses precision, above 6.22 sr (nearly a hemisphere) it breaks down.
+const MIN_SPHERICAL_SAMPLE_AREA: f32 = 3e-4;
+const MAX_SPHERICAL_SAMPLE_AREA: f32 = 6.22;
+
+#[inline]
+fn spherical_sampling(omega: f32) -> bool {
+    (MIN_SPHERICAL_SAMPLE_AREA..=MAX_SPHERICAL_SAMPLE_AREA).contains(&omega)
+}
+
+#[inline]
+fn mesh_triangle(mesh: &Mesh, face: u32) -> [Vec3; 3] {
+    mesh.indices[face as usize].map(|i| mesh.positions[i as usize])
+}
+
+/// The geometric normal of a mesh triangle, flipped with `flip_normals`.
+#[inline]
+fn mesh_normal(mesh: &Mesh, v: &[Vec3; 3]) -> Vec3 {
+    let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+    if mesh.flip_normals {
+        -n
+    } else {
+        n
+    }
+}
+
+/// The cone of directions a sphere subtends from a point outside it.
+struct SphereCone {
+    /// Squared distance from the point to the centre.
+    dist2: f32,
+    /// sin² of the half-angle.
+    sin2_max: f32,
+    /// 1 − cos of the half-angle, written s² / (1 + √(1 − s²)) so that tiny cones (small
+    /// distant lights) keep their precision.
+    one_minus_cos_max: f32,
+}
+
+impl SphereCone {
+    /// `None` when `ref_p` is inside the sphere or on it (up to a relative 10⁻⁴ in distance²).
+    #[inline]
+    fn new(center: Vec3, radius: f32, ref_p: Vec3) -> Option<Self> {
+        let dist2 = (center - ref_p).length_squared();
+        let r2 = radius * radius;
+        if !(dist2 > r2 * (1.0 + 1e-4)) {
+            return None;
+        }
+        let sin2_max = r2 / dist2;
+        Some(Self {
+            dist2,
+            sin2_max,
+            one_minus_cos_max: sin2_max / (1.0 + (1.0 - sin2_max).sqrt()),
+        })
+    }
+
+    #[inline]
+    fn pdf(&self) -> f32 {
+        INV_TWO_PI / self.one_minus_cos_max
+    }
+
+    /// A direction uniformly in the cone and the point where it meets the near side of the
+    /// sphere. That distance is the smaller root of t² − 2tD cos θ + D² − r² = 0, written as
+    /// (D² − r²) / (D cos θ + r √(1 − sin² θ / sin² θmax)): no cancellation, neither for
+    /// small cones (distant lights) nor for points close to the surface, where both the usual
+    /// root formula and pbrt-v4's angle at the centre round the point onto the cone's axis.
+    fn sample(
+        &self,
+        center: Vec3,
+        radius: f32,
+        flip_normals: bool,
+        ref_p: Vec3,
+        u: Vec2,
+    ) -> Option<DirectionSample> {
+        // cos θ = 1 − u (1 − cos θmax); sin² θ = (1 − cos θ)(1 + cos θ) without cancellation.
+        let omc = u.x * self.one_minus_cos_max;
+        let cos_theta = 1.0 - omc;
+        let sin2_theta = omc * (2.0 - omc);
+        let sin_theta = sin2_theta.sqrt();
+        let (sin_phi, cos_phi) = (2.0 * PI * u.y).sin_cos();
+        let frame = Frame::from_normal((center - ref_p).normalize());
+        let d = frame.to_world(Vec3::new(
+            sin_theta * cos_phi,
+            sin_theta * sin_phi,
+            cos_theta,
+        ));
+        let t = (self.dist2 - radius * radius)
+            / (self.dist2.sqrt() * cos_theta
+                + radius * radia_math::safe_sqrt(1.0 - sin2_theta / self.sin2_max));
+        let p = ref_p + d * t;
+        let outward = (p - center).normalize();
+        (t.is_finite() && t > 0.0).then(|| DirectionSample {
+            p,
+            n: if flip_normals { -outward } else { outward },
+            d,
+            dist: t,
+            pdf: self.pdf(),
+        })
+    }
+}
+
 /// A point on an emitter chosen from a reference point.
 #[derive(Clone, Copy, Debug)]
 pub struct DirectionSample {
     pub p: Vec3,
+    /// Geometric normal at `p` (flipped with `flip_normals`).
     pub n: Vec3,
     /// Unit direction from the reference point to `p`.
     pub d: Vec3,

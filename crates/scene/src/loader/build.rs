@@ -2,6 +2,7 @@
 //! its parameters through [`Props`] with Mitsuba's names, defaults and checks.
 
 use super::bsdfs::build_bsdf;
+use super::emitters::build_emitter;
 use super::props::Props;
 use super::shapes::build_shape;
 use super::transform;
@@ -10,9 +11,8 @@ use super::LoadError;
 use crate::{
     CameraDesc, EmitterDesc, FilmDesc, FilterDesc, IntegratorDesc, SamplerDesc, SceneDescription,
 };
-use glam::{Affine3A, Vec3};
+use glam::Affine3A;
 use radia_bsdf::Bsdf;
-use radia_math::Spectrum;
 use std::collections::HashMap;
 
 /// State shared by the plugin builders.
@@ -63,7 +63,8 @@ pub(crate) fn build_scene(doc: &Doc) -> Result<(SceneDescription, Vec<String>), 
             Kind::Shape => shapes.push(build_shape(&mut b, n)?),
             Kind::Emitter => {
                 let e = build_emitter(&b, n)?;
-                if !emitters.is_empty() {
+                // Mitsuba's Scene constructor: at most one `constant` or `envmap`.
+                if e.is_environment() && emitters.iter().any(EmitterDesc::is_environment) {
                     return Err(p.err_at(
                         p.prop_pos(i),
                         "only one environment emitter can be specified per scene",
@@ -406,39 +407,4 @@ fn build_sampler(b: &Builder<'_>, idx: usize) -> Result<SamplerDesc, LoadError> 
         sample_count: sample_count as u32,
         seed: seed as u64,
     })
-}
-
-/// A top-level emitter: `constant` (`src/emitters/constant.cpp`).
-fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<EmitterDesc, LoadError> {
-    let mut p = Props::new(b.doc, idx);
-    match p.node.plugin.as_str() {
-        "constant" => {
-            let radiance = p.color("radiance", 1.0, false)?;
-            p.finish()?;
-            Ok(EmitterDesc::Constant { radiance: radiance.as_vec3() })
-        }
-        "area" => Err(p.err("an area emitter must be nested in the <shape> that emits")),
-        other => Err(p.err(format!(
-            "unsupported emitter plugin type \"{other}\" (radia supports: area inside a shape, constant)"
-        ))),
-    }
-}
-
-/// The `area` emitter of a shape (`src/emitters/area.cpp`): its radiance.
-pub(crate) fn area_emitter(b: &Builder<'_>, idx: usize) -> Result<Spectrum, LoadError> {
-    let mut p = Props::new(b.doc, idx);
-    match p.node.plugin.as_str() {
-        "area" => {
-            let radiance = p.color("radiance", 1.0, false)?;
-            p.finish()?;
-            Ok(Vec3::new(
-                radiance.x as f32,
-                radiance.y as f32,
-                radiance.z as f32,
-            ))
-        }
-        other => Err(p.err(format!(
-            "emitter type \"{other}\" cannot be attached to a shape (only \"area\" can)"
-        ))),
-    }
 }

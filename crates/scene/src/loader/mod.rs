@@ -7,13 +7,15 @@
 //!
 //! 1. `xml.rs`: the text becomes plugin nodes with typed properties (`$name` substitution,
 //!    `<default>`, values, `<transform>`, ids and references).
-//! 2. `build.rs`, `shapes.rs`, `bsdfs.rs`: each plugin reads its parameters, with Mitsuba's
-//!    names, defaults and checks, into the [`SceneDescription`]. Parameters a plugin does not
-//!    read are reported.
+//! 2. `build.rs`, `shapes.rs`, `bsdfs.rs`, `emitters.rs`: each plugin reads its parameters,
+//!    with Mitsuba's names, defaults and checks, into the [`SceneDescription`]. Parameters a
+//!    plugin does not read are reported.
 
 mod bsdfs;
 mod build;
+mod emitters;
 mod error;
+mod image;
 mod mesh;
 mod obj;
 mod ply;

@@ -2,7 +2,8 @@
 //! each with `to_world`, `flip_normals`, at most one nested BSDF and one `area` emitter.
 
 use super::bsdfs::{build_bsdf, default_bsdf};
-use super::build::{area_emitter, Builder};
+use super::build::Builder;
+use super::emitters::area_emitter;
 use super::mesh::{self, MeshStats, RawMesh};
 use super::props::Props;
 use super::xml::Kind;
@@ -182,7 +183,7 @@ fn mesh_geometry(
 
 /// A mesh filename relative to the scene file's directory (then to the working directory, as
 /// Mitsuba's file resolver falls back to it).
-fn resolve_path(dir: &Path, filename: &str) -> PathBuf {
+pub(crate) fn resolve_path(dir: &Path, filename: &str) -> PathBuf {
     let f = Path::new(filename);
     if f.is_absolute() {
         return f.to_path_buf();

@@ -783,8 +783,8 @@ fn loader_twosided_and_default_bsdfs() {
         "range [0, 1]",
     );
     expect_err(
-        load("point-emitter", r#"<emitter type="point"/>"#),
-        "unsupported emitter plugin type \"point\"",
+        load("projector-emitter", r#"<emitter type="projector"/>"#),
+        "unsupported emitter plugin type \"projector\"",
     );
     expect_err(
         load(

@@ -1,0 +1,308 @@
+//! Light selection for next-event estimation: which light to sample from a shading point.
+//!
+//! The unit of choice is the *light primitive* ([`LightPrim`]): one triangle of an emitting
+//! mesh, or one whole emitter of any other kind. Three strategies ([`LightSamplerKind`]):
+//!
+//! * **uniform**: Mitsuba's (`src/render/scene.cpp`): every emitter equally likely, then a
+//!   triangle of a mesh by area, so its images and noise can be compared with Mitsuba's.
+//! * **power**: in proportion to each primitive's power (an alias table), as pbrt-v4's
+//!   `PowerLightSampler`.
+//! * **bvh** (the default): a light BVH after pbrt-v4's `BVHLightSampler` (Conty Estevez and
+//!   Kulla 2018, `src/pbrt/lightsamplers.{h,cpp}`): the choice follows an estimate of each
+//!   light's contribution at the shading point from its power, distance and orientation.
+//!
+//! A scene with a single light primitive builds no structure at all. Whatever the strategy,
+//! the probability of a choice ([`Lights::pmf`]) is a function of the shading point and its
+//! normal only, so next-event estimation and the MIS weight of an emitter hit by BSDF
+//! sampling use the same number.
+
+mod bvh;
+#[cfg(test)]
+mod tests;
+
+pub use bvh::{BvhLight, LightBounds, LightBvh};
+
+use crate::emitter::{Emitter, EmitterSample};
+use crate::shape::{Shape, ShapeKind, SurfaceInteraction};
+use crate::Scene;
+use glam::{Vec2, Vec3};
+use radia_sampling::DiscreteDistribution;
+
+/// How next-event estimation chooses a light.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightSamplerKind {
+    /// Uniformly over emitters, then by area over a mesh's triangles (Mitsuba's choice).
+    Uniform,
+    /// In proportion to power.
+    Power,
+    /// By a light BVH that accounts for distance and orientation (radia's default).
+    #[default]
+    Bvh,
+}
+
+impl std::str::FromStr for LightSamplerKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "uniform" => Ok(Self::Uniform),
+            "power" => Ok(Self::Power),
+            "bvh" => Ok(Self::Bvh),
+            _ => Err(format!(
+                "unknown light sampler \"{s}\" (expected uniform, power or bvh)"
+            )),
+        }
+    }
+}
+
+impl std::fmt::Display for LightSamplerKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Uniform => "uniform",
+            Self::Power => "power",
+            Self::Bvh => "bvh",
+        })
+    }
+}
+
+/// Where a light is chosen from: the shading point and its shading normal (zero when there
+/// is no surface, e.g. in a medium).
+#[derive(Clone, Copy, Debug)]
+pub struct LightContext {
+    pub p: Vec3,
+    pub n: Vec3,
+}
+
+/// One light to choose: triangle `face` of emitter `emitter` (0 for emitters that are not
+/// meshes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LightPrim {
+    pub emitter: u32,
+    pub face: u32,
+}
+
+/// The light primitives of a scene and the structure that chooses among them.
+#[derive(Clone, Debug)]
+pub struct Lights {
+    kind: LightSamplerKind,
+    prims: Vec<LightPrim>,
+    /// Index of the first light primitive of each emitter; its faces follow.
+    first_prim: Vec<u32>,
+    selector: Selector,
+}
+
+#[derive(Clone, Debug)]
+enum Selector {
+    /// Nothing emits.
+    Empty,
+    /// One light primitive: chosen with probability 1.
+    Single,
+    /// Fixed probabilities (uniform or power).
+    Table(DiscreteDistribution),
+    Bvh(LightBvh),
+}
+
+impl Lights {
+    /// Light primitives of `emitters` and the `kind` of structure to choose among them.
+    /// `scene_sphere` (centre, radius) bounds the geometry: lights at infinity send their
+    /// power through it.
+    pub fn build(
+        kind: LightSamplerKind,
+        emitters: &[Emitter],
+        shapes: &[Shape],
+        scene_sphere: (Vec3, f32),
+    ) -> Self {
+        let mut prims = Vec::new();
+        let mut first_prim = Vec::with_capacity(emitters.len());
+        for (e, emitter) in emitters.iter().enumerate() {
+            first_prim.push(prims.len() as u32);
+            for face in 0..emitter.primitive_count(shapes) {
+                prims.push(LightPrim {
+                    emitter: e as u32,
+                    face,
+                });
+            }
+        }
+        let power =
+            |p: &LightPrim| emitters[p.emitter as usize].power(shapes, p.face, scene_sphere.1);
+        let selector = match (prims.len(), kind) {
+            (0, _) => Selector::Empty,
+            (1, _) => Selector::Single,
+            (_, LightSamplerKind::Uniform) => {
+                // Mitsuba: 1 / (number of emitters), then area within a mesh.
+                let share = 1.0 / emitters.len() as f32;
+                let weights: Vec<f32> = prims
+                    .iter()
+                    .map(|p| match &emitters[p.emitter as usize] {
+                        Emitter::Area(a) => {
+                            let shape = &shapes[a.shape as usize];
+                            if shape.area > 0.0 {
+                                share * shape.part_area(p.face) / shape.area
+                            } else {
+                                0.0
+                            }
+                        }
+                        _ => share,
+                    })
+                    .collect();
+                DiscreteDistribution::new(&weights).map_or(Selector::Empty, Selector::Table)
+            }
+            (_, LightSamplerKind::Power) => {
+                let weights: Vec<f32> = prims.iter().map(power).collect();
+                DiscreteDistribution::new(&weights).map_or(Selector::Empty, Selector::Table)
+            }
+            (_, LightSamplerKind::Bvh) => {
+                let lights: Vec<BvhLight> = prims
+                    .iter()
+                    .map(|p| {
+                        let e = &emitters[p.emitter as usize];
+                        let phi = power(p);
+                        if !(phi > 0.0) {
+                            BvhLight::Off
+                        } else if e.is_infinite() {
+                            BvhLight::Infinite
+                        } else {
+                            bvh::light_bounds(e, shapes, p.face, phi)
+                                .map_or(BvhLight::Off, BvhLight::Bounded)
+                        }
+                    })
+                    .collect();
+                LightBvh::build(&lights).map_or(Selector::Empty, Selector::Bvh)
+            }
+        };
+        Self {
+            kind,
+            prims,
+            first_prim,
+            selector,
+        }
+    }
+
+    pub fn kind(&self) -> LightSamplerKind {
+        self.kind
+    }
+
+    /// Number of light primitives.
+    pub fn len(&self) -> usize {
+        self.prims.len()
+    }
+
+    /// True when next-event estimation has nothing to sample.
+    pub fn is_empty(&self) -> bool {
+        matches!(self.selector, Selector::Empty)
+    }
+
+    pub fn prim(&self, index: usize) -> LightPrim {
+        self.prims[index]
+    }
+
+    /// The light primitive of triangle `face` of `emitter` (`face` 0 for other kinds).
+    #[inline]
+    pub fn prim_index(&self, emitter: u32, face: u32) -> usize {
+        (self.first_prim[emitter as usize] + face) as usize
+    }
+
+    /// Chooses a light primitive from `ctx` with `u` in [0, 1): its index and probability.
+    #[inline]
+    pub fn sample(&self, ctx: &LightContext, u: f32) -> Option<(usize, f32)> {
+        match &self.selector {
+            Selector::Empty => None,
+            Selector::Single => Some((0, 1.0)),
+            Selector::Table(t) => {
+                let s = t.sample(u);
+                Some((s.index, s.pmf))
+            }
+            Selector::Bvh(b) => b.sample(ctx.p, ctx.n, u),
+        }
+    }
+
+    /// Probability that [`Lights::sample`] chooses light primitive `index` from `ctx`.
+    #[inline]
+    pub fn pmf(&self, ctx: &LightContext, index: usize) -> f32 {
+        match &self.selector {
+            Selector::Empty => 0.0,
+            Selector::Single => 1.0,
+            Selector::Table(t) => t.pmf(index),
+            Selector::Bvh(b) => b.pmf(ctx.p, ctx.n, index),
+        }
+    }
+}
+
+/// Centre and radius of the sphere around every shape (Mitsuba's scene bounding sphere, what
+/// lights at infinity shine through); the unit sphere when there are no shapes.
+pub fn scene_sphere(shapes: &[Shape]) -> (Vec3, f32) {
+    let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+    for s in shapes {
+        let (a, b) = match &s.kind {
+            ShapeKind::Mesh(m) => m
+                .positions
+                .iter()
+                .fold((lo, hi), |(a, b), &p| (a.min(p), b.max(p))),
+            ShapeKind::Sphere { center, radius, .. } => (*center - *radius, *center + *radius),
+            ShapeKind::Disk { to_world, .. } => {
+                let c = to_world.transform_point3(Vec3::ZERO);
+                let r = to_world.transform_vector3(Vec3::X).length()
+                    + to_world.transform_vector3(Vec3::Y).length();
+                (c - r, c + r)
+            }
+        };
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    if !(lo.cmple(hi).all()) {
+        return (Vec3::ZERO, 1.0);
+    }
+    ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-4))
+}
+
+impl Scene {
+    /// Rebuilds the light selection with another strategy.
+    pub fn set_light_sampler(&mut self, kind: LightSamplerKind) {
+        self.lights = Lights::build(
+            kind,
+            &self.emitters,
+            &self.shapes,
+            scene_sphere(&self.shapes),
+        );
+    }
+
+    /// Next-event estimation: chooses a light from `ctx` with `u_sel`, then a direction
+    /// towards it with `u`. The returned pdf includes the probability of the choice (as
+    /// Mitsuba's `Scene::sample_emitter_direction`). Visibility is not tested.
+    #[inline]
+    pub fn sample_emitter_direction(
+        &self,
+        ctx: &LightContext,
+        u_sel: f32,
+        u: Vec2,
+    ) -> Option<EmitterSample> {
+        let (index, pmf) = self.lights.sample(ctx, u_sel)?;
+        let prim = self.lights.prim(index);
+        let mut es = self.emitters[prim.emitter as usize].sample_direction(
+            &self.shapes,
+            ctx.p,
+            prim.face,
+            u,
+        )?;
+        es.pdf *= pmf;
+        Some(es)
+    }
+
+    /// Density with which [`Scene::sample_emitter_direction`] from `ctx` produces the
+    /// direction to emitter `emitter` found by BSDF sampling: at the hit `si` (area lights)
+    /// or along the escaped direction `d` (environments).
+    #[inline]
+    pub fn pdf_emitter_direction(
+        &self,
+        ctx: &LightContext,
+        emitter: u32,
+        si: Option<&SurfaceInteraction>,
+        d: Vec3,
+    ) -> f32 {
+        let face = si.map_or(0, |s| s.face);
+        let pmf = self.lights.pmf(ctx, self.lights.prim_index(emitter, face));
+        if pmf == 0.0 {
+            return 0.0;
+        }
+        pmf * self.emitters[emitter as usize].pdf_direction(&self.shapes, ctx.p, si, d)
+    }
+}

@@ -1,0 +1,965 @@
+//! Statistical tests of light sampling, through the same calls the integrator makes
+//! (`Scene::sample_emitter_direction`, `Scene::pdf_emitter_direction`):
+//!
+//! * chi-square tests of the directions sampled towards every kind of light that has a
+//!   density (triangles, rectangles, meshes, spheres, disks, environments) against that
+//!   density, from near, far and grazing points, the selection among light primitives
+//!   included;
+//! * the envmap's sampling on a generated map with a sharp bright spot, zoomed on the spot;
+//! * the light selection (uniform, power, BVH): probabilities that sum to one and match the
+//!   frequencies of the choices; delta lights' values against closed forms.
+//!
+//! The density of a direction is found as the integrator finds it: trace a ray from the
+//! reference point, ask the light it meets.
+
+use crate::description::*;
+use crate::emitter::Emitter;
+use crate::lights::{LightContext, LightSamplerKind};
+use crate::spherical::triangle_solid_angle;
+use crate::Scene;
+use glam::{Affine3A, Vec2, Vec3};
+use radia_bsdf::{Bsdf, Diffuse};
+use radia_math::{Frame, Ray, PI};
+use radia_sampling::chi2::{
+    chi2_test, chi2_test_2d, chi2_test_discrete, sidak_alpha, Chi2Config, Chi2Config2d,
+    DEFAULT_ALPHA,
+};
+use radia_sampling::warp;
+
+/// Chi-square tests in this file that are expected to pass (Šidák: the file falsely fails
+/// with probability 1%).
+const CHI2_TESTS: usize = 39;
+
+fn alpha() -> f64 {
+    sidak_alpha(DEFAULT_ALPHA, CHI2_TESTS)
+}
+
+// ---------------------------------------------------------------------------------------
+// Scenes
+
+fn emitting(geometry: Geometry, radiance: Vec3) -> ShapeDesc {
+    ShapeDesc {
+        geometry,
+        bsdf: Bsdf::Diffuse(Diffuse::new(Vec3::ZERO)),
+        emission: Some(radiance),
+        origin: "test".into(),
+    }
+}
+
+fn scene(shapes: Vec<ShapeDesc>, emitters: Vec<EmitterDesc>, kind: LightSamplerKind) -> Scene {
+    let mut s = Scene::build(SceneDescription {
+        integrator: IntegratorDesc::default(),
+        camera: CameraDesc {
+            to_world: Affine3A::IDENTITY,
+            fov_x_degrees: 45.0,
+            near_clip: 0.01,
+            far_clip: 1e4,
+        },
+        film: FilmDesc::default(),
+        sampler: SamplerDesc::default(),
+        shapes,
+        emitters,
+    });
+    s.set_light_sampler(kind);
+    s
+}
+
+fn mesh(positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Geometry {
+    Geometry::Mesh(Mesh {
+        positions,
+        normals: None,
+        uvs: None,
+        indices,
+        flip_normals: false,
+    })
+}
+
+/// One triangle in the plane z = 0, facing +z.
+fn triangle() -> Geometry {
+    mesh(
+        vec![
+            Vec3::new(-0.5, -0.4, 0.0),
+            Vec3::new(0.7, -0.2, 0.0),
+            Vec3::new(0.1, 0.6, 0.0),
+        ],
+        vec![[0, 1, 2]],
+    )
+}
+
+/// Mitsuba's rectangle [−1, 1]² × {0} scaled by `s`, facing +z (two triangles).
+fn rectangle(s: f32) -> Geometry {
+    mesh(
+        vec![
+            Vec3::new(-s, -s, 0.0),
+            Vec3::new(s, -s, 0.0),
+            Vec3::new(s, s, 0.0),
+            Vec3::new(-s, s, 0.0),
+        ],
+        vec![[0, 1, 2], [2, 3, 0]],
+    )
+}
+
+/// An axis-aligned box of half-size `h` around `c`, normals outwards (12 triangles).
+fn cube(c: Vec3, h: Vec3) -> Geometry {
+    let p: Vec<Vec3> = (0..8)
+        .map(|i| {
+            c + h * Vec3::new(
+                if i & 1 != 0 { 1.0 } else { -1.0 },
+                if i & 2 != 0 { 1.0 } else { -1.0 },
+                if i & 4 != 0 { 1.0 } else { -1.0 },
+            )
+        })
+        .collect();
+    // Faces as quads (counter-clockwise seen from outside).
+    let quads = [
+        [0, 2, 3, 1], // −z
+        [4, 5, 7, 6], // +z
+        [0, 1, 5, 4], // −y
+        [2, 6, 7, 3], // +y
+        [0, 4, 6, 2], // −x
+        [1, 3, 7, 5], // +x
+    ];
+    let mut idx = Vec::new();
+    for q in quads {
+        idx.push([q[0], q[1], q[2]]);
+        idx.push([q[2], q[3], q[0]]);
+    }
+    mesh(p, idx)
+}
+
+fn disk(center: Vec3, radius: f32, normal: Vec3) -> Geometry {
+    let f = Frame::from_normal(normal.normalize());
+    Geometry::Disk {
+        to_world: Affine3A::from_cols(
+            (f.s * radius).into(),
+            (f.t * radius).into(),
+            f.n.into(),
+            center.into(),
+        ),
+        flip_normals: false,
+    }
+}
+
+fn sphere(center: Vec3, radius: f32, flip_normals: bool) -> Geometry {
+    Geometry::Sphere {
+        center,
+        radius,
+        flip_normals,
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// The chi-square test of light sampling from one point
+
+/// Density of the direction `d` from `ctx` as the integrator computes it for a ray that
+/// BSDF sampling sent that way.
+fn pdf_towards(scene: &Scene, ctx: &LightContext, d: Vec3) -> f32 {
+    match scene.intersect(&Ray::new(ctx.p, d, f32::INFINITY)) {
+        Some(si) => match scene.surface_emitter(&si) {
+            Some((e, _)) => scene.pdf_emitter_direction(ctx, e, Some(&si), d),
+            None => 0.0,
+        },
+        None => scene
+            .environment
+            .map_or(0.0, |e| scene.pdf_emitter_direction(ctx, e, None, d)),
+    }
+}
+
+/// Chi-square test of next-event estimation's directions from (p, n), on a grid zoomed on
+/// the cone around `target` of half-angle `half_angle` (π: the whole sphere). A sample whose
+/// light is hidden behind another counts as failed: the density of its direction is the
+/// visible light's.
+fn check_from(scene: &Scene, p: Vec3, n: Vec3, target: Vec3, half_angle: f32, what: &str) {
+    let ctx = LightContext { p, n };
+    let frame = Frame::from_normal((target - p).normalize());
+    let cos_min = if half_angle >= PI {
+        -1.0
+    } else {
+        (half_angle as f64).cos().max(-1.0)
+    };
+    let cfg = Chi2Config {
+        cos_theta_min: cos_min,
+        alpha: alpha(),
+        ..Default::default()
+    };
+    let r = chi2_test(
+        &cfg,
+        |u, u1| {
+            let es = scene.sample_emitter_direction(&ctx, u1, u)?;
+            // Hidden if something is hit clearly before the sampled point. A ray grazing the
+            // edge of the sampled triangle may miss it by round-off, and near a sphere's
+            // silhouette the two roots are ill-conditioned: neither is an occluder.
+            let visible = scene
+                .intersect(&Ray::new(p, es.d, f32::INFINITY))
+                .is_none_or(|si| si.t >= es.dist * (1.0 - 1e-2));
+            visible.then(|| frame.to_local(es.d))
+        },
+        |d| pdf_towards(scene, &ctx, frame.to_world(d)) as f64,
+    );
+    assert!(r.passed, "{what}: from {p}: {}", r.report);
+    assert!(
+        r.integral_of_pdf <= 1.0 + 2e-3,
+        "{what}: from {p}: the density integrates to {}",
+        r.integral_of_pdf
+    );
+}
+
+/// The half-angle of the cone around the centre of a sphere (c, r) seen from `p`, widened by
+/// a half so that the grid's border cells see nothing, or π from inside.
+fn cone_around(p: Vec3, c: Vec3, r: f32) -> f32 {
+    let d = (c - p).length();
+    if d <= r * 1.01 {
+        PI
+    } else {
+        ((r / d).asin() * 1.5).min(PI)
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Area lights
+
+/// Chi-square test of next-event estimation on a mesh light, in the domain of its
+/// triangles rather than of directions: triangle k is mapped onto [k, k + 1] × [0, 1] by the
+/// inverse of the uniform triangle warp (whose Jacobian is the triangle's area), so the
+/// density of a point there is pdf_ω · cos θ_light / d² · area. A polygon's support then
+/// fills the grid's cells instead of clipping their corners, where the quadrature of the
+/// density cannot see it.
+fn check_mesh_from(scene: &Scene, tris: &[[Vec3; 3]], p: Vec3, n: Vec3, what: &str) {
+    let ctx = LightContext { p, n };
+    let k = tris.len();
+    let cfg = Chi2Config2d {
+        x_res: (30 * k).max(51),
+        y_res: 30,
+        alpha: alpha(),
+        ..Chi2Config2d::new(Vec2::ZERO, Vec2::new(k as f32, 1.0))
+    };
+    let normal = |v: &[Vec3; 3]| (v[1] - v[0]).cross(v[2] - v[0]);
+    let r = chi2_test_2d(
+        &cfg,
+        |u, u1| {
+            let es = scene.sample_emitter_direction(&ctx, u1, u)?;
+            // The triangle the point lies on: in its plane and inside it.
+            let (t, b) = tris
+                .iter()
+                .enumerate()
+                .map(|(t, v)| {
+                    let nv = normal(v);
+                    let area2 = nv.length_squared();
+                    let b1 = (es.p - v[0]).cross(v[2] - v[0]).dot(nv) / area2;
+                    let b2 = (v[1] - v[0]).cross(es.p - v[0]).dot(nv) / area2;
+                    let off_plane = (es.p - v[0]).dot(nv).abs() / area2.sqrt();
+                    let outside = (-b1).max(-b2).max(b1 + b2 - 1.0).max(0.0);
+                    (off_plane + outside, t, Vec2::new(b1, b2))
+                })
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+                .map(|(_, t, b)| (t, b))?;
+            let q = warp::uniform_triangle_to_square(b.clamp(Vec2::ZERO, Vec2::ONE));
+            Some(Vec2::new(t as f32 + q.x.min(0.999_999), q.y))
+        },
+        |x| {
+            let t = (x.x as usize).min(k - 1);
+            let v = &tris[t];
+            let b = warp::square_to_uniform_triangle(Vec2::new(x.x - t as f32, x.y));
+            let q = v[0] * (1.0 - b.x - b.y) + v[1] * b.x + v[2] * b.y;
+            let delta = q - p;
+            let dist2 = delta.length_squared();
+            let d = delta / dist2.sqrt();
+            let nv = normal(v);
+            let cos = nv.normalize().dot(d).abs();
+            let area = 0.5 * nv.length();
+            // Only a first hit on this very triangle counts: a point hidden behind the mesh's
+            // front faces, or on the edge of a back face, is never reached by sampling it.
+            let pdf = match scene.intersect(&Ray::new(p, d, f32::INFINITY)) {
+                Some(si) if si.face == t as u32 && si.t >= dist2.sqrt() * (1.0 - 1e-3) => {
+                    let (e, _) = scene.surface_emitter(&si).unwrap();
+                    scene.pdf_emitter_direction(&ctx, e, Some(&si), d)
+                }
+                _ => 0.0,
+            };
+            (pdf * cos / dist2 * area) as f64
+        },
+    );
+    assert!(r.passed, "{what}: from {p}: {}", r.report);
+}
+
+/// The triangles of a mesh geometry.
+fn triangles(g: &Geometry) -> Vec<[Vec3; 3]> {
+    match g {
+        Geometry::Mesh(m) => m
+            .indices
+            .iter()
+            .map(|idx| idx.map(|i| m.positions[i as usize]))
+            .collect(),
+        _ => unreachable!(),
+    }
+}
+
+#[test]
+fn chi2_triangle_near_far_grazing() {
+    let s = scene(
+        vec![emitting(triangle(), Vec3::ONE)],
+        vec![],
+        LightSamplerKind::Bvh,
+    );
+    let tris = triangles(&triangle());
+    let near = Vec3::new(0.3, -0.1, 0.4);
+    let far = Vec3::new(-20.0, 30.0, 60.0);
+    let grazing = Vec3::new(1.5, 0.4, 0.02);
+    // Near and grazing sample the spherical triangle, far falls back to area sampling.
+    assert!(triangle_solid_angle(&tris[0], near) > 3e-4);
+    assert!(triangle_solid_angle(&tris[0], far) < 3e-4);
+    assert!(triangle_solid_angle(&tris[0], grazing) > 3e-4);
+    for (p, n) in [(near, -Vec3::Z), (far, Vec3::ZERO), (grazing, Vec3::X)] {
+        check_mesh_from(&s, &tris, p, n, "triangle");
+    }
+}
+
+#[test]
+fn chi2_rectangle_uniform_power_bvh() {
+    let points = [
+        (Vec3::new(0.2, 0.1, 0.3), -Vec3::Z),
+        (
+            Vec3::new(-3.0, 2.0, 1.5),
+            Vec3::new(1.0, 0.0, 1.0).normalize(),
+        ),
+        (Vec3::new(0.0, -2.0, 0.01), Vec3::Y),
+    ];
+    let tris = triangles(&rectangle(0.5));
+    for kind in [
+        LightSamplerKind::Uniform,
+        LightSamplerKind::Power,
+        LightSamplerKind::Bvh,
+    ] {
+        let s = scene(
+            vec![emitting(rectangle(0.5), Vec3::new(4.0, 3.0, 2.0))],
+            vec![],
+            kind,
+        );
+        for (p, n) in points {
+            check_mesh_from(&s, &tris, p, n, "rectangle");
+        }
+    }
+}
+
+#[test]
+fn chi2_sphere_near_far_grazing_inside() {
+    let c = Vec3::new(0.0, 1.0, 0.0);
+    let s = scene(
+        vec![emitting(sphere(c, 0.5, false), Vec3::ONE)],
+        vec![],
+        LightSamplerKind::Bvh,
+    );
+    for p in [
+        Vec3::new(0.3, 0.0, 0.4),
+        Vec3::new(60.0, -50.0, 40.0),
+        // Just above the surface: the cone is nearly a hemisphere.
+        c + Vec3::new(0.0, 0.0, 0.5003),
+    ] {
+        check_from(&s, p, Vec3::ZERO, c, cone_around(p, c, 0.5), "sphere");
+    }
+    // Inside a sphere that emits inwards: area sampling.
+    let s = scene(
+        vec![emitting(sphere(c, 0.5, true), Vec3::ONE)],
+        vec![],
+        LightSamplerKind::Bvh,
+    );
+    check_from(
+        &s,
+        c + Vec3::new(0.1, 0.2, -0.15),
+        Vec3::Y,
+        c,
+        PI,
+        "sphere inside",
+    );
+}
+
+#[test]
+fn chi2_tiny_distant_sphere() {
+    // sin² θmax = 2.5·10⁻⁷: 1 − cos θmax needs the cancellation-free form.
+    let c = Vec3::new(100.0, 0.0, 0.0);
+    let s = scene(
+        vec![emitting(sphere(c, 0.05, false), Vec3::ONE)],
+        vec![],
+        LightSamplerKind::Bvh,
+    );
+    check_from(
+        &s,
+        Vec3::ZERO,
+        Vec3::X,
+        c,
+        cone_around(Vec3::ZERO, c, 0.05),
+        "tiny sphere",
+    );
+}
+
+#[test]
+fn chi2_disk_near_far_grazing() {
+    let c = Vec3::new(0.0, 0.0, 1.0);
+    let n = Vec3::new(0.2, -0.3, -1.0).normalize();
+    let s = scene(
+        vec![emitting(disk(c, 0.4, n), Vec3::ONE)],
+        vec![],
+        LightSamplerKind::Bvh,
+    );
+    let f = Frame::from_normal(n);
+    for p in [
+        c + n * 0.3 + f.s * 0.1,
+        c + n * 40.0 + f.t * 7.0,
+        c + n * 0.06 + f.s * 1.0,
+    ] {
+        check_from(&s, p, -n, c, cone_around(p, c, 0.4), "disk");
+    }
+}
+
+#[test]
+fn chi2_cube_mesh_light_by_bvh_and_uniform() {
+    // Twelve triangles, half of them facing away from any outside point.
+    let c = Vec3::new(0.0, 0.5, 0.0);
+    let h = Vec3::new(0.3, 0.2, 0.4);
+    let tris = triangles(&cube(c, h));
+    for kind in [LightSamplerKind::Bvh, LightSamplerKind::Uniform] {
+        let s = scene(vec![emitting(cube(c, h), Vec3::ONE)], vec![], kind);
+        for (p, n) in [
+            (Vec3::new(0.5, -0.2, 0.6), Vec3::Y),
+            (Vec3::new(-4.0, 3.0, 1.0), Vec3::ZERO),
+        ] {
+            check_mesh_from(&s, &tris, p, n, "cube");
+        }
+    }
+}
+
+#[test]
+fn chi2_many_lights_mixed_by_bvh() {
+    // Small spheres, triangles and disks around the point, plus a constant environment:
+    // the selection probabilities enter the density of every direction.
+    let mut shapes = Vec::new();
+    for i in 0..6 {
+        let a = i as f32 * 1.1;
+        let c = Vec3::new(a.cos() * 1.5, 0.5 + 0.3 * i as f32, a.sin() * 1.5);
+        shapes.push(emitting(
+            sphere(c, 0.1 + 0.05 * i as f32, false),
+            Vec3::splat(1.0 + i as f32),
+        ));
+        shapes.push(emitting(
+            disk(c * 1.3 + Vec3::Y, 0.2, -c),
+            Vec3::new(2.0, 1.0, 0.5),
+        ));
+    }
+    shapes.push(emitting(rectangle(0.3), Vec3::splat(3.0)));
+    let s = scene(
+        shapes,
+        vec![EmitterDesc::Constant {
+            radiance: Vec3::splat(0.2),
+        }],
+        LightSamplerKind::Bvh,
+    );
+    check_from(
+        &s,
+        Vec3::new(0.1, 1.0, 0.2),
+        Vec3::ZERO,
+        Vec3::Y,
+        PI,
+        "mixed",
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// Environments
+
+#[test]
+fn chi2_constant_environment() {
+    let s = scene(
+        vec![],
+        vec![EmitterDesc::Constant {
+            radiance: Vec3::splat(2.0),
+        }],
+        LightSamplerKind::Bvh,
+    );
+    check_from(&s, Vec3::ZERO, Vec3::Z, Vec3::Z, PI, "constant");
+}
+
+/// A W × H map: a smooth sky, darker below the horizon, with a sun of a few texels `sun`
+/// times brighter centred on texel (si, sj).
+fn sky_image(w: u32, h: u32, si: u32, sj: u32, sun: f32) -> RgbImage {
+    let mut pixels = Vec::new();
+    for j in 0..h {
+        for i in 0..w {
+            let v = j as f32 / (h - 1) as f32;
+            let base = if v < 0.5 { 0.6 + 0.4 * v } else { 0.1 };
+            let mut c =
+                Vec3::new(base * 0.8, base * 0.9, base) * (1.0 + 0.2 * (i as f32 * 0.7).sin());
+            let (di, dj) = (i as i32 - si as i32, j as i32 - sj as i32);
+            if di.abs() <= 1 && dj.abs() <= 1 {
+                c += Vec3::new(1.0, 0.9, 0.7) * sun * if di == 0 && dj == 0 { 1.0 } else { 0.3 };
+            }
+            pixels.push(c);
+        }
+    }
+    RgbImage {
+        width: w,
+        height: h,
+        pixels,
+    }
+}
+
+/// Mitsuba's direction of (u, v) in the envmap's frame (envmap.cpp's `uv_to_direction`).
+fn uv_to_direction(u: f32, v: f32) -> Vec3 {
+    let (st, ct) = (v * PI).sin_cos();
+    let (sp, cp) = (u * 2.0 * PI).sin_cos();
+    Vec3::new(sp * st, ct, -cp * st)
+}
+
+fn envmap_scene(image: RgbImage, to_world: Affine3A) -> Scene {
+    scene(
+        vec![],
+        vec![EmitterDesc::Envmap {
+            image,
+            scale: 1.0,
+            to_world,
+            mis_compensation: false,
+        }],
+        LightSamplerKind::Bvh,
+    )
+}
+
+#[test]
+fn chi2_envmap_with_a_sun() {
+    let (w, h) = (48, 25);
+    let (si, sj) = (31, 7);
+    let to_world = Affine3A::from_rotation_y(0.7) * Affine3A::from_rotation_x(-0.4);
+    let s = envmap_scene(sky_image(w, h, si, sj, 5000.0), to_world);
+    let sun = to_world.transform_vector3(uv_to_direction(
+        (si as f32 + 0.5) / w as f32,
+        sj as f32 / (h - 1) as f32,
+    ));
+    // The whole sphere, then a cap of 0.3 rad around the sun (the sun's texels span about
+    // 2 × 0.13 rad in each direction).
+    check_from(&s, Vec3::ZERO, Vec3::ZERO, Vec3::Y, PI, "envmap");
+    check_from(&s, Vec3::ZERO, Vec3::ZERO, sun, 0.3, "envmap sun");
+    // Most samples go to the sun.
+    let ctx = LightContext {
+        p: Vec3::ZERO,
+        n: Vec3::ZERO,
+    };
+    let mut towards_sun = 0;
+    for k in 0..1000 {
+        let u = Vec2::new(
+            (k as f32 + 0.5) / 1000.0,
+            ((k * 7919) % 1000) as f32 / 1000.0,
+        );
+        let es = s.sample_emitter_direction(&ctx, 0.5, u).unwrap();
+        if es.d.dot(sun) > 0.3f32.cos() {
+            towards_sun += 1;
+        }
+    }
+    assert!(
+        towards_sun > 800,
+        "{towards_sun} of 1000 samples near the sun"
+    );
+}
+
+/// A tall thin map with bright poles and the sun on the seam (column 0).
+fn poles_image() -> RgbImage {
+    let (w, h) = (8, 33);
+    let mut img = sky_image(w, h, 0, 16, 300.0);
+    for i in 0..w as usize {
+        img.pixels[i] = Vec3::splat(50.0);
+        img.pixels[(h as usize - 1) * w as usize + i] = Vec3::splat(20.0);
+    }
+    img
+}
+
+fn poles_envmap(mis_compensation: bool) -> Emitter {
+    Emitter::from_desc(&EmitterDesc::Envmap {
+        image: poles_image(),
+        scale: 2.0,
+        to_world: Affine3A::IDENTITY,
+        mis_compensation,
+    })
+}
+
+#[test]
+fn chi2_envmap_poles_and_seam() {
+    // The rows at the poles and the periodic wrap are sampled right.
+    let s = scene(
+        vec![],
+        vec![EmitterDesc::Envmap {
+            image: poles_image(),
+            scale: 2.0,
+            to_world: Affine3A::IDENTITY,
+            mis_compensation: false,
+        }],
+        LightSamplerKind::Bvh,
+    );
+    // A grid whose pole is not the map's, so no row of grid cells straddles a
+    // discontinuity of the density all the way round.
+    check_from(
+        &s,
+        Vec3::ZERO,
+        Vec3::ZERO,
+        Vec3::new(1.0, 0.3, 0.5),
+        PI,
+        "envmap poles",
+    );
+}
+
+/// ∫ pdf dω by the midpoint rule on an n × n grid in (cos θ, φ).
+fn integral_of_pdf(e: &Emitter, n: usize) -> f64 {
+    let mut sum = 0.0f64;
+    for a in 0..n {
+        let z = 1.0 - 2.0 * (a as f64 + 0.5) / n as f64;
+        let r = (1.0 - z * z).sqrt();
+        for b in 0..n {
+            let phi = std::f64::consts::TAU * (b as f64 + 0.5) / n as f64;
+            let d = Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
+            sum += e.pdf_direction(&[], Vec3::ZERO, None, d) as f64;
+        }
+    }
+    sum * 4.0 * std::f64::consts::PI / (n * n) as f64
+}
+
+#[test]
+fn envmap_mis_compensation_is_consistent() {
+    // Mitsuba's MIS compensation gives the cells darker than average no samples: their
+    // density drops to zero, a discontinuity the chi-square quadrature cannot follow, so
+    // here the density is checked directly against the samples and for normalization.
+    let (plain, compensated) = (poles_envmap(false), poles_envmap(true));
+    for e in [&plain, &compensated] {
+        let integral = integral_of_pdf(e, 1000);
+        assert!((integral - 1.0).abs() < 1e-3, "∫ pdf = {integral}");
+        let mut mismatched = 0;
+        for k in 0..100_000u32 {
+            let u = Vec2::new(
+                ((k as u64 * 2654435761) % 1_000_003) as f32 / 1_000_003.0,
+                (k as f32 + 0.5) / 1e5,
+            );
+            let es = e.sample_direction(&[], Vec3::ZERO, 0, u).unwrap();
+            assert!(es.pdf > 0.0);
+            let pdf = e.pdf_direction(&[], Vec3::ZERO, None, es.d);
+            // Only directions on the border of two cells may round into the other one.
+            if (pdf - es.pdf).abs() > 1e-5 * es.pdf {
+                mismatched += 1;
+            }
+            // Equal up to the round-off of the direction (steep near the sun's texels).
+            let l = e.eval_environment(es.d);
+            let tolerance = 1e-3 * (es.radiance.max_element() + 1.0);
+            assert!(
+                (es.radiance - l).abs().max_element() < tolerance,
+                "{} vs {l}",
+                es.radiance
+            );
+        }
+        assert!(
+            mismatched <= 10,
+            "{mismatched} of 100000 samples disagree with pdf_direction"
+        );
+    }
+    // Below-average directions are never sampled once compensated (the horizon band is dark).
+    let dark = Vec3::new(1.0, -0.6, 0.3).normalize();
+    assert!(plain.pdf_direction(&[], Vec3::ZERO, None, dark) > 0.0);
+    assert_eq!(compensated.pdf_direction(&[], Vec3::ZERO, None, dark), 0.0);
+}
+
+#[test]
+fn envmap_mapping_is_mitsubas() {
+    // Texel centres: column i at u = (i + ½)/W, row j at v = j/(H − 1).
+    let (w, h) = (6u32, 5u32);
+    let img = RgbImage {
+        width: w,
+        height: h,
+        pixels: (0..w * h).map(|k| Vec3::new(k as f32, 1.0, 0.0)).collect(),
+    };
+    let to_world = Affine3A::from_rotation_z(0.3);
+    let e = Emitter::from_desc(&EmitterDesc::Envmap {
+        image: img,
+        scale: 3.0,
+        to_world,
+        mis_compensation: false,
+    });
+    for j in 1..h - 1 {
+        for i in 0..w {
+            let d = uv_to_direction((i as f32 + 0.5) / w as f32, j as f32 / (h - 1) as f32);
+            let l = e.eval_environment(to_world.transform_vector3(d));
+            let expect = 3.0 * (j * w + i) as f32;
+            assert!(
+                (l.x - expect).abs() < 2e-3 * expect.max(1.0),
+                "texel ({i}, {j}): {l}"
+            );
+            assert!((l.y - 3.0).abs() < 1e-4);
+        }
+    }
+    // Half-way between columns 5 and 0 (the seam, u = 0): their mean.
+    let d = uv_to_direction(0.0, 2.0 / 4.0);
+    let l = e.eval_environment(to_world.transform_vector3(d));
+    assert!((l.x - 3.0 * (12.0 + 17.0) / 2.0).abs() < 1e-2, "{l}");
+    // The local +y axis is the first row; −z is u = 0.
+    let zenith = e.eval_environment(to_world.transform_vector3(Vec3::Y));
+    assert!(zenith.x < 3.0 * 6.0, "{zenith}");
+}
+
+// ---------------------------------------------------------------------------------------
+// Light selection
+
+/// 192 light primitives of every kind with a position, scattered, plus lights at infinity.
+fn many_lights(kind: LightSamplerKind, with_infinite: bool) -> Scene {
+    let mut shapes = Vec::new();
+    let mut emitters = Vec::new();
+    let mut seed = 12345u32;
+    let mut rnd = || {
+        seed = seed.wrapping_mul(1664525).wrapping_add(1013904223);
+        (seed >> 8) as f32 / (1u32 << 24) as f32
+    };
+    for i in 0..60 {
+        let c = Vec3::new(rnd() * 8.0 - 4.0, rnd() * 3.0, rnd() * 8.0 - 4.0);
+        let l = Vec3::new(rnd(), rnd(), rnd()) * (0.1 + 10.0 * rnd());
+        match i % 5 {
+            0 => shapes.push(emitting(sphere(c, 0.05 + 0.2 * rnd(), false), l)),
+            1 => {
+                let n = Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5);
+                shapes.push(emitting(disk(c, 0.1 + 0.2 * rnd(), n), l));
+            }
+            2 => shapes.push(emitting(
+                cube(c, Vec3::new(0.1, 0.2, 0.15) * (0.5 + rnd())),
+                l,
+            )),
+            3 => emitters.push(EmitterDesc::Point {
+                position: c,
+                intensity: l,
+            }),
+            _ => emitters.push(EmitterDesc::Spot {
+                to_world: crate::look_at(c, c + Vec3::new(rnd() - 0.5, -1.0, rnd() - 0.5), Vec3::Z)
+                    .unwrap(),
+                intensity: l,
+                cutoff_angle: 20.0 + 40.0 * rnd(),
+                beam_width: 15.0,
+                falloff_exponent: None,
+            }),
+        }
+    }
+    if with_infinite {
+        emitters.push(EmitterDesc::Directional {
+            direction: Vec3::new(0.3, -1.0, 0.2),
+            irradiance: Vec3::splat(2.0),
+        });
+        emitters.push(EmitterDesc::Constant {
+            radiance: Vec3::splat(0.3),
+        });
+    }
+    scene(shapes, emitters, kind)
+}
+
+fn contexts() -> Vec<LightContext> {
+    vec![
+        LightContext {
+            p: Vec3::new(0.1, 0.0, 0.2),
+            n: Vec3::Y,
+        },
+        LightContext {
+            p: Vec3::new(-3.5, 1.2, 3.0),
+            n: Vec3::new(1.0, 0.5, -1.0).normalize(),
+        },
+        LightContext {
+            p: Vec3::new(20.0, 5.0, -7.0),
+            n: Vec3::ZERO,
+        },
+        // In the middle of the lights, facing down.
+        LightContext {
+            p: Vec3::new(0.0, 1.5, 0.0),
+            n: -Vec3::Y,
+        },
+    ]
+}
+
+#[test]
+fn bvh_selection_sums_to_one_and_matches_its_sampling() {
+    for with_infinite in [false, true] {
+        let s = many_lights(LightSamplerKind::Bvh, with_infinite);
+        let lights = &s.lights;
+        assert!(lights.len() > 180);
+        for ctx in contexts() {
+            let pmf: Vec<f64> = (0..lights.len())
+                .map(|i| lights.pmf(&ctx, i) as f64)
+                .collect();
+            let sum: f64 = pmf.iter().sum();
+            assert!((sum - 1.0).abs() < 1e-4, "at {}: Σ pmf = {sum}", ctx.p);
+            // The probability sampling reports is the one pmf() recomputes.
+            for k in 0..2000 {
+                let u = (k as f32 + 0.5) / 2000.0;
+                let (i, p) = lights.sample(&ctx, u).expect("a light");
+                assert!(
+                    (p as f64 - pmf[i]).abs() <= 1e-5 * pmf[i],
+                    "light {i}: sampled with {p}, pmf {}",
+                    pmf[i]
+                );
+            }
+            let r = chi2_test_discrete(
+                lights.len(),
+                1_000_000,
+                7,
+                alpha(),
+                |u, _| lights.sample(&ctx, u).map(|(i, _)| i),
+                |i| pmf[i],
+            );
+            assert!(r.passed, "at {}: {}", ctx.p, r.report);
+        }
+    }
+}
+
+#[test]
+fn bvh_selection_follows_distance_and_orientation() {
+    // Two equal lights: the near one is chosen more often, and a light facing away from the
+    // point is never chosen.
+    let shapes = vec![
+        emitting(disk(Vec3::new(0.0, 1.0, 0.0), 0.1, -Vec3::Y), Vec3::ONE),
+        emitting(disk(Vec3::new(3.0, 1.0, 0.0), 0.1, -Vec3::Y), Vec3::ONE),
+        emitting(disk(Vec3::new(-1.0, 1.0, 0.0), 0.1, Vec3::Y), Vec3::ONE),
+    ];
+    let s = scene(shapes, vec![], LightSamplerKind::Bvh);
+    let ctx = LightContext {
+        p: Vec3::ZERO,
+        n: Vec3::Y,
+    };
+    let (near, far, away) = (
+        s.lights.pmf(&ctx, 0),
+        s.lights.pmf(&ctx, 1),
+        s.lights.pmf(&ctx, 2),
+    );
+    assert!(near > 5.0 * far, "near {near}, far {far}");
+    assert_eq!(away, 0.0);
+    assert!((near + far - 1.0).abs() < 1e-6);
+}
+
+#[test]
+fn uniform_and_power_tables() {
+    for kind in [LightSamplerKind::Uniform, LightSamplerKind::Power] {
+        let s = many_lights(kind, true);
+        let ctx = contexts()[0];
+        let n = s.lights.len();
+        let pmf: Vec<f64> = (0..n).map(|i| s.lights.pmf(&ctx, i) as f64).collect();
+        assert!((pmf.iter().sum::<f64>() - 1.0).abs() < 1e-4);
+        let r = chi2_test_discrete(
+            n,
+            1_000_000,
+            8,
+            alpha(),
+            |u, _| s.lights.sample(&ctx, u).map(|(i, _)| i),
+            |i| pmf[i],
+        );
+        assert!(r.passed, "{kind}: {}", r.report);
+    }
+    // Uniform is Mitsuba's: each emitter 1/n, a mesh's triangles by area.
+    let s = scene(
+        vec![
+            emitting(rectangle(1.0), Vec3::ONE),
+            emitting(sphere(Vec3::Y, 0.1, false), Vec3::splat(100.0)),
+        ],
+        vec![],
+        LightSamplerKind::Uniform,
+    );
+    let ctx = contexts()[0];
+    assert_eq!(s.lights.len(), 3);
+    for i in 0..2 {
+        assert!((s.lights.pmf(&ctx, i) - 0.25).abs() < 1e-6);
+    }
+    assert!((s.lights.pmf(&ctx, 2) - 0.5).abs() < 1e-6);
+}
+
+#[test]
+fn one_light_needs_no_selection() {
+    let s = scene(
+        vec![],
+        vec![EmitterDesc::Point {
+            position: Vec3::Y,
+            intensity: Vec3::ONE,
+        }],
+        LightSamplerKind::Bvh,
+    );
+    let ctx = contexts()[0];
+    assert_eq!(s.lights.sample(&ctx, 0.7), Some((0, 1.0)));
+    let s = scene(vec![], vec![], LightSamplerKind::Bvh);
+    assert!(s.lights.is_empty());
+}
+
+// ---------------------------------------------------------------------------------------
+// Delta lights: values against closed forms
+
+#[test]
+fn point_spot_directional_values() {
+    let ctx = LightContext {
+        p: Vec3::new(0.0, 0.0, 0.0),
+        n: Vec3::Y,
+    };
+    let s = scene(
+        vec![],
+        vec![EmitterDesc::Point {
+            position: Vec3::new(0.0, 2.0, 0.0),
+            intensity: Vec3::new(4.0, 8.0, 12.0),
+        }],
+        LightSamplerKind::Bvh,
+    );
+    let es = s
+        .sample_emitter_direction(&ctx, 0.3, Vec2::splat(0.5))
+        .unwrap();
+    assert!(es.is_delta && es.pdf == 1.0 && (es.dist - 2.0).abs() < 1e-6);
+    assert!((es.d - Vec3::Y).length() < 1e-6);
+    assert!((es.radiance - Vec3::new(1.0, 2.0, 3.0)).length() < 1e-6);
+
+    // Spot at (0, 2, 0) looking down, cutoff 30°, beam 20°: the receiver at horizontal
+    // offset x sees it at angle atan(x / 2).
+    let spot = |beam: f32, exponent: Option<f32>| {
+        scene(
+            vec![],
+            vec![EmitterDesc::Spot {
+                to_world: crate::look_at(Vec3::new(0.0, 2.0, 0.0), Vec3::ZERO, Vec3::Z).unwrap(),
+                intensity: Vec3::splat(8.0),
+                cutoff_angle: 30.0,
+                beam_width: beam,
+                falloff_exponent: exponent,
+            }],
+            LightSamplerKind::Bvh,
+        )
+    };
+    let at_angle = |s: &Scene, deg: f32| {
+        let x = 2.0 * deg.to_radians().tan();
+        let ctx = LightContext {
+            p: Vec3::new(x, 0.0, 0.0),
+            n: Vec3::Y,
+        };
+        s.sample_emitter_direction(&ctx, 0.5, Vec2::ZERO)
+            .map_or(0.0, |es| es.radiance.x * es.dist * es.dist / 8.0)
+    };
+    let s = spot(20.0, None);
+    for (deg, expect) in [
+        (0.0, 1.0),
+        (19.0, 1.0),
+        (25.0, 0.5),
+        (27.5, 0.25),
+        (31.0, 0.0),
+    ] {
+        let f = at_angle(&s, deg);
+        assert!(
+            (f - expect).abs() < 2e-3,
+            "spot falloff at {deg}°: {f}, expected {expect}"
+        );
+    }
+    // radia's cos^e extension.
+    let s = spot(20.0, Some(8.0));
+    for deg in [0.0f32, 10.0, 25.0] {
+        let f = at_angle(&s, deg);
+        let expect = deg.to_radians().cos().powf(8.0);
+        assert!((f - expect).abs() < 1e-3, "cos^8 at {deg}°: {f}");
+    }
+    assert_eq!(at_angle(&s, 31.0), 0.0);
+
+    let s = scene(
+        vec![],
+        vec![EmitterDesc::Directional {
+            direction: Vec3::new(0.0, -2.0, 0.0),
+            irradiance: Vec3::splat(3.0),
+        }],
+        LightSamplerKind::Bvh,
+    );
+    let es = s.sample_emitter_direction(&ctx, 0.5, Vec2::ZERO).unwrap();
+    assert!(es.is_delta && es.dist.is_infinite());
+    assert!((es.d - Vec3::Y).length() < 1e-6 && es.radiance == Vec3::splat(3.0));
+}

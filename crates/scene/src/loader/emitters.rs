@@ -1,0 +1,156 @@
+//! Emitter plugins (`src/emitters/*.cpp`): `area` inside a shape; `point`, `spot`,
+//! `directional`, `constant` and `envmap` at the top level, with Mitsuba's parameter names,
+//! defaults and checks. Their semantics are documented in [`crate::emitter`].
+
+use super::build::Builder;
+use super::image::read_rgb_image;
+use super::props::Props;
+use super::shapes::resolve_path;
+use super::LoadError;
+use crate::EmitterDesc;
+use glam::{Affine3A, DMat4, DVec3};
+use radia_math::Spectrum;
+
+/// A top-level emitter.
+pub(crate) fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<EmitterDesc, LoadError> {
+    let mut p = Props::new(b.doc, idx);
+    let e = match p.node.plugin.as_str() {
+        "constant" => EmitterDesc::Constant {
+            radiance: p.color("radiance", 1.0, false)?.as_vec3(),
+        },
+        "envmap" => envmap(b, &mut p)?,
+        "point" => {
+            let position = if p.has("position") {
+                exclusive(&p, "position", "to_world")?;
+                p.point("position", DVec3::ZERO)?
+            } else {
+                p.transform("to_world")?.w_axis.truncate()
+            };
+            EmitterDesc::Point {
+                position: position.as_vec3(),
+                intensity: p.color("intensity", 1.0, false)?.as_vec3(),
+            }
+        }
+        "spot" => {
+            let intensity = p.color("intensity", 1.0, false)?.as_vec3();
+            let cutoff_angle = p.float("cutoff_angle", 20.0)?;
+            let beam_width = p.float("beam_width", cutoff_angle * 0.75)?;
+            // radia's extension: the classic cos^e profile (Mitsuba rejects the parameter).
+            let falloff_exponent = p.float_opt("falloff_exponent")?;
+            if let Some(e) = falloff_exponent {
+                if !(e >= 0.0 && e.is_finite()) {
+                    return Err(p.err_at(
+                        p.pos_of("falloff_exponent"),
+                        format!("spot: \"falloff_exponent\" must be a finite value >= 0, got {e}"),
+                    ));
+                }
+            }
+            if !(cutoff_angle > 0.0 && cutoff_angle <= 180.0) || !(beam_width >= 0.0) {
+                return Err(p.err_at(
+                    p.pos_of("cutoff_angle"),
+                    format!("spot: angles out of range (cutoff_angle {cutoff_angle}, beam_width {beam_width}): need 0 < cutoff_angle <= 180 and beam_width >= 0"),
+                ));
+            }
+            EmitterDesc::Spot {
+                to_world: affine(&p.transform("to_world")?),
+                intensity,
+                cutoff_angle: cutoff_angle as f32,
+                beam_width: beam_width as f32,
+                falloff_exponent: falloff_exponent.map(|e| e as f32),
+            }
+        }
+        "directional" => {
+            let direction = if p.has("direction") {
+                exclusive(&p, "direction", "to_world")?;
+                p.point("direction", DVec3::Z)?
+            } else {
+                p.transform("to_world")?.transform_vector3(DVec3::Z)
+            };
+            if !(direction.length() > 0.0) {
+                return Err(p.err_at(
+                    p.pos_of("direction"),
+                    "directional: the direction must not be zero",
+                ));
+            }
+            EmitterDesc::Directional {
+                direction: direction.normalize().as_vec3(),
+                irradiance: p.color("irradiance", 1.0, false)?.as_vec3(),
+            }
+        }
+        "area" => return Err(p.err("an area emitter must be nested in the <shape> that emits")),
+        other => {
+            return Err(p.err(format!(
+                "unsupported emitter plugin type \"{other}\" (radia supports: area inside a shape, point, spot, directional, constant, envmap)"
+            )))
+        }
+    };
+    p.finish()?;
+    Ok(e)
+}
+
+/// The `area` emitter of a shape (`src/emitters/area.cpp`): its radiance.
+pub(crate) fn area_emitter(b: &Builder<'_>, idx: usize) -> Result<Spectrum, LoadError> {
+    let mut p = Props::new(b.doc, idx);
+    match p.node.plugin.as_str() {
+        "area" => {
+            let radiance = p.color("radiance", 1.0, false)?.as_vec3();
+            p.finish()?;
+            Ok(radiance)
+        }
+        other => Err(p.err(format!(
+            "emitter type \"{other}\" cannot be attached to a shape (only \"area\" can)"
+        ))),
+    }
+}
+
+/// `envmap` (`src/emitters/envmap.cpp`): `filename`, `scale`, `to_world`, `mis_compensation`.
+fn envmap(b: &Builder<'_>, p: &mut Props<'_>) -> Result<EmitterDesc, LoadError> {
+    let Some(filename) = p.string_opt("filename")? else {
+        return Err(p.err("envmap: the \"filename\" parameter is required"));
+    };
+    let path = resolve_path(&b.doc.dir, filename);
+    let image = read_rgb_image(&path).map_err(|e| {
+        p.err_at(
+            p.pos_of("filename"),
+            format!(
+                "envmap image \"{}\" (filename=\"{filename}\"): {e}",
+                path.display()
+            ),
+        )
+    })?;
+    if image.width == 0 || image.height == 0 {
+        return Err(p.err_at(p.pos_of("filename"), "envmap: the image is empty"));
+    }
+    let scale = p.float("scale", 1.0)?;
+    let to_world = p.transform("to_world")?;
+    // radia samples and evaluates the map through a rotation only (a scaled or sheared frame
+    // would distort Mitsuba's mapping in ways radia does not reproduce).
+    let m = glam::DMat3::from_mat4(to_world);
+    if !((m.transpose() * m).abs_diff_eq(glam::DMat3::IDENTITY, 1e-4) && m.determinant() > 0.0) {
+        return Err(p.err_at(
+            p.pos_of("to_world"),
+            "envmap: radia supports rotations only in \"to_world\" (no scale, shear or mirroring)",
+        ));
+    }
+    Ok(EmitterDesc::Envmap {
+        image,
+        scale: scale as f32,
+        to_world: affine(&to_world),
+        mis_compensation: p.boolean("mis_compensation", false)?,
+    })
+}
+
+/// Mitsuba: "Only one of the parameters 'a' and 'b' can be specified at the same time!"
+fn exclusive(p: &Props<'_>, a: &str, b: &str) -> Result<(), LoadError> {
+    if p.has(b) {
+        return Err(p.err_at(
+            p.pos_of(b),
+            format!("only one of the parameters '{a}' and '{b}' can be specified at the same time"),
+        ));
+    }
+    Ok(())
+}
+
+fn affine(m: &DMat4) -> Affine3A {
+    Affine3A::from_mat4(m.as_mat4())
+}
