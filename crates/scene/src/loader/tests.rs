@@ -772,8 +772,8 @@ fn loader_twosided_and_default_bsdfs() {
         "at most two",
     );
     expect_err(
-        load("conductor", r#"<bsdf type="conductor" id="c"/>"#),
-        "unsupported BSDF plugin type \"conductor\"",
+        load("hair", r#"<bsdf type="hair" id="c"/>"#),
+        "unsupported BSDF plugin type \"hair\"",
     );
     expect_err(
         load(
