@@ -184,7 +184,9 @@ fn cone_union(a: (Vec3, f32), b: (Vec3, f32)) -> (Vec3, f32) {
 }
 
 /// The bounds of light primitive `face` of `emitter` with power `phi`; `None` for lights at
-/// infinity.
+/// infinity. A spot's bound takes the power of a point light of its intensity, 4πI, not its
+/// (much smaller) power inside the cone, as pbrt-v4's `SpotLight::Bounds`: the importance
+/// accounts for the cone through the orientation bounds.
 pub(crate) fn light_bounds(
     emitter: &Emitter,
     shapes: &[Shape],
@@ -248,12 +250,15 @@ pub(crate) fn light_bounds(
         Emitter::Point(l) => Some(at(l.position, Vec3::Z, -1.0, cos_half_pi)),
         Emitter::Spot(l) => {
             let (theta_o, theta_e) = l.cone_angles();
-            Some(at(
-                l.position,
-                l.axis,
-                theta_o.cos(),
-                (theta_e + 1e-3).min(PI).cos(),
-            ))
+            Some(LightBounds {
+                phi: 4.0 * PI * l.intensity.max_element(),
+                ..at(
+                    l.position,
+                    l.axis,
+                    theta_o.cos(),
+                    (theta_e + 1e-3).min(PI).cos(),
+                )
+            })
         }
         Emitter::Directional(_) | Emitter::Constant(_) | Emitter::Envmap(_) => None,
     }
