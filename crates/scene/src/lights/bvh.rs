@@ -83,43 +83,72 @@ impl LightBounds {
             two_sided: a.two_sided || b.two_sided,
         }
     }
+}
+
+/// [`LightBounds`] as the walk down the tree reads them, at two nodes per level: the
+/// bounding sphere and the sines and cosines of the cone, computed once at build time.
+#[derive(Clone, Copy, Debug)]
+struct NodeBounds {
+    center: Vec3,
+    radius: f32,
+    w: Vec3,
+    phi: f32,
+    cos_o: f32,
+    sin_o: f32,
+    cos_e: f32,
+    two_sided: bool,
+}
+
+impl NodeBounds {
+    fn new(b: &LightBounds) -> Self {
+        Self {
+            center: b.centroid(),
+            radius: (b.hi - b.lo).length() * 0.5,
+            w: b.w,
+            phi: b.phi,
+            cos_o: b.cos_theta_o,
+            sin_o: safe_sqrt(1.0 - b.cos_theta_o * b.cos_theta_o),
+            cos_e: b.cos_theta_e,
+            two_sided: b.two_sided,
+        }
+    }
 
     /// pbrt-v4's `CompactLightBounds::Importance` at point `p` with shading normal `n` (zero:
-    /// no receiver cosine).
-    pub fn importance(&self, p: Vec3, n: Vec3) -> f32 {
-        let pc = self.centroid();
-        let half_diag = (self.hi - self.lo).length() * 0.5;
-        let d2 = (p - pc)
-            .length_squared()
-            .max(half_diag * half_diag)
-            .max(1e-20);
-        // Direction from the lights to the point; any will do when p is at the centre, since
-        // the bounds then subtend the whole sphere and the angles below do not matter.
-        let wi = (p - pc).try_normalize().unwrap_or(self.w);
+    /// no receiver cosine): φ cos θ' / d², times cos θ'ᵢ at a surface, where θ' is the
+    /// smallest angle between an emission direction and the direction to `p` over the
+    /// bounds, θ'ᵢ the same at the receiver, and d is clamped to the bounds' radius.
+    #[inline]
+    fn importance(&self, p: Vec3, n: Vec3) -> f32 {
+        let d = p - self.center;
+        let dc2 = d.length_squared();
+        let r2 = self.radius * self.radius;
+        if dc2 <= r2 {
+            // Inside the bounding sphere every direction is possible: θ' = θ'ᵢ = 0.
+            return if 1.0 > self.cos_e {
+                (self.phi / r2.max(1e-20)).min(f32::MAX)
+            } else {
+                0.0
+            };
+        }
+        let inv = dc2.sqrt().recip();
+        // Unit direction from the lights to p; the half-angle θb of the cone of directions
+        // from p that the bounding sphere subtends.
+        let wi = d * inv;
+        let sin_b = self.radius * inv;
+        let cos_b = safe_sqrt(1.0 - sin_b * sin_b);
         let mut cos_w = self.w.dot(wi);
         if self.two_sided {
             cos_w = cos_w.abs();
         }
         let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
-        // Half-angle of the cone of directions from p that the bounds' sphere subtends.
-        let r2 = half_diag * half_diag;
-        let dc2 = (p - pc).length_squared();
-        let cos_b = if dc2 < r2 {
-            -1.0
-        } else {
-            safe_sqrt(1.0 - r2 / dc2)
-        };
-        let sin_b = safe_sqrt(1.0 - cos_b * cos_b);
-        // θ' = max(0, θw − θo − θb): the smallest angle between a normal and the direction
-        // to p over the bounds.
-        let sin_o = safe_sqrt(1.0 - self.cos_theta_o * self.cos_theta_o);
-        let cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, self.cos_theta_o);
-        let sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, self.cos_theta_o);
+        // θ' = max(0, θw − θo − θb).
+        let cos_x = cos_sub_clamped(sin_w, cos_w, self.sin_o, self.cos_o);
+        let sin_x = sin_sub_clamped(sin_w, cos_w, self.sin_o, self.cos_o);
         let cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
-        if cos_p <= self.cos_theta_e {
+        if cos_p <= self.cos_e {
             return 0.0;
         }
-        let mut importance = self.phi * cos_p / d2;
+        let mut importance = self.phi * cos_p / dc2;
         if n != Vec3::ZERO {
             let cos_i = wi.dot(n).abs();
             let sin_i = safe_sqrt(1.0 - cos_i * cos_i);
@@ -283,7 +312,7 @@ const MAX_SAH_DEPTH: u32 = 64;
 
 #[derive(Clone, Debug)]
 struct Node {
-    bounds: LightBounds,
+    bounds: NodeBounds,
     parent: u32,
     /// Leaf: the light primitive. Interior: the second child (the first follows the node).
     child_or_prim: u32,
@@ -345,7 +374,7 @@ impl LightBvh {
         let index = self.nodes.len() as u32;
         if let [(prim, b)] = lights {
             self.nodes.push(Node {
-                bounds: *b,
+                bounds: NodeBounds::new(b),
                 parent,
                 child_or_prim: *prim,
                 is_leaf: true,
@@ -356,7 +385,7 @@ impl LightBvh {
         let mid = split(lights, depth);
         // Placeholder, completed once the children are built.
         self.nodes.push(Node {
-            bounds: LightBounds::EMPTY,
+            bounds: NodeBounds::new(&LightBounds::EMPTY),
             parent,
             child_or_prim: 0,
             is_leaf: false,
@@ -366,7 +395,7 @@ impl LightBvh {
         let (second, b1) = self.build_node(hi, index, depth + 1);
         let bounds = LightBounds::union(&b0, &b1);
         let node = &mut self.nodes[index as usize];
-        node.bounds = bounds;
+        node.bounds = NodeBounds::new(&bounds);
         node.child_or_prim = second;
         (index, bounds)
     }
