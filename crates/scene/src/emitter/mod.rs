@@ -120,14 +120,6 @@ impl Emitter {
         matches!(self, Emitter::Constant(_) | Emitter::Envmap(_))
     }
 
-    /// Point, spot and directional lights: a Dirac delta in position or direction.
-    pub fn is_delta(&self) -> bool {
-        matches!(
-            self,
-            Emitter::Point(_) | Emitter::Spot(_) | Emitter::Directional(_)
-        )
-    }
-
     /// Lights at infinity (environments and directional lights): they have no position, so
     /// the light BVH keeps them apart.
     pub fn is_infinite(&self) -> bool {

@@ -471,11 +471,6 @@ impl LightBvh {
         let sum = c0 + c1;
         (c0 / sum, c1 / sum)
     }
-
-    /// Number of nodes (tests, statistics).
-    pub fn node_count(&self) -> usize {
-        self.nodes.len()
-    }
 }
 
 /// pbrt-v4's `EvaluateCost`: power × a measure of the solid angle of the emission cone ×

@@ -83,7 +83,6 @@ pub struct LightPrim {
 /// The light primitives of a scene and the structure that chooses among them.
 #[derive(Clone, Debug)]
 pub struct Lights {
-    kind: LightSamplerKind,
     prims: Vec<LightPrim>,
     /// Index of the first light primitive of each emitter; its faces follow.
     first_prim: Vec<u32>,
@@ -170,15 +169,10 @@ impl Lights {
             }
         };
         Self {
-            kind,
             prims,
             first_prim,
             selector,
         }
-    }
-
-    pub fn kind(&self) -> LightSamplerKind {
-        self.kind
     }
 
     /// Number of light primitives.
