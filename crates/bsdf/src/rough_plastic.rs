@@ -157,14 +157,37 @@ impl RoughPlastic {
         let (dm, sm) = (diffuse_reflectance.mean(), specular_reflectance.mean());
         // The tables always use visible normals (Mitsuba builds a default distribution).
         let table_distr = MicrofacetDistribution::new(kind, alpha, alpha, true);
-        let mut external_transmittance = Box::new([0.0f32; TRANSMITTANCE_RES]);
-        let mut internal = 0.0f64;
-        for (i, t) in external_transmittance.iter_mut().enumerate() {
+        // (t(μ), R_int(μ) μ) at each tabulated μ: about 10⁶ sampled normals in all, so the
+        // rows are shared out over the available cores (scene loading waits for them).
+        let row = |i: usize| {
             let mu = (i as f32 / (TRANSMITTANCE_RES - 1) as f32).max(1e-6);
             let wi = Vec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
-            *t = rough_transmittance(&table_distr, wi, eta);
-            internal += (rough_reflectance(&table_distr, wi, 1.0 / eta) * mu) as f64;
+            (
+                rough_transmittance(&table_distr, wi, eta),
+                (rough_reflectance(&table_distr, wi, 1.0 / eta) * mu) as f64,
+            )
+        };
+        let mut rows = [(0.0f32, 0.0f64); TRANSMITTANCE_RES];
+        let threads = std::thread::available_parallelism()
+            .map_or(1, |n| n.get())
+            .min(8);
+        let chunk = TRANSMITTANCE_RES.div_ceil(threads);
+        std::thread::scope(|scope| {
+            for (c, out) in rows.chunks_mut(chunk).enumerate() {
+                let row = &row;
+                scope.spawn(move || {
+                    for (k, r) in out.iter_mut().enumerate() {
+                        *r = row(c * chunk + k);
+                    }
+                });
+            }
+        });
+        let mut external_transmittance = Box::new([0.0f32; TRANSMITTANCE_RES]);
+        for (t, r) in external_transmittance.iter_mut().zip(&rows) {
+            *t = r.0;
         }
+        // Summed in index order: the same value whatever the number of threads.
+        let internal: f64 = rows.iter().map(|r| r.1).sum();
         let internal_reflectance = (internal / TRANSMITTANCE_RES as f64 * 2.0) as f32;
         Self {
             distribution,
