@@ -72,7 +72,7 @@ struct WatertightRay {
 }
 
 impl WatertightRay {
-    #[inline]
+    #[inline(always)]
     fn new(ray: &Ray) -> Self {
         let a = ray.d.abs();
         let kz = if a.x > a.y {
@@ -120,8 +120,9 @@ impl WatertightRay {
         let mut w = bx * ay - by * ax;
         if u == 0.0 || v == 0.0 || w == 0.0 {
             // Exactly on an edge in single precision: decide in double precision.
-            let (ax, ay, bx, by, cx, cy) =
-                (ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64);
+            let (ax, ay, bx, by, cx, cy) = (
+                ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64,
+            );
             u = (cx * by - cy * bx) as f32;
             v = (ax * cy - ay * cx) as f32;
             w = (bx * ay - by * ax) as f32;
@@ -329,7 +330,12 @@ impl Accel {
     }
 
     /// The exact test of one primitive (index into [`Accel::primitives`]) against `ray`.
-    pub fn intersect_primitive(&self, shapes: &[Shape], ray: &Ray, prim: usize) -> Option<(f32, Vec2)> {
+    pub fn intersect_primitive(
+        &self,
+        shapes: &[Shape],
+        ray: &Ray,
+        prim: usize,
+    ) -> Option<(f32, Vec2)> {
         self.intersect_prim(shapes, &WatertightRay::new(ray), ray, prim, ray.t_max)
     }
 

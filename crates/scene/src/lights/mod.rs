@@ -123,7 +123,14 @@ impl Lights {
         }
         let power =
             |p: &LightPrim| emitters[p.emitter as usize].power(shapes, p.face, scene_sphere.1);
-        let selector = match (prims.len(), kind) {
+        // One emitter is one light, whatever its triangle count: its triangles are chosen in
+        // proportion to area from a table, and no light BVH is built.
+        let structure = if emitters.len() == 1 {
+            LightSamplerKind::Uniform
+        } else {
+            kind
+        };
+        let selector = match (prims.len(), structure) {
             (0, _) => Selector::Empty,
             (1, _) => Selector::Single,
             (_, LightSamplerKind::Uniform) => {
