@@ -50,7 +50,11 @@ fn lookat_camera_rays_match_hand_computed() {
     // Centre of the film: straight ahead, starting on the near plane.
     let r = cam.generate_ray(Vec2::new(0.5, 0.5));
     assert_close(r.d, Vec3::new(0.0, 0.0, -1.0), "centre direction");
-    assert_close(r.o, eye + Vec3::new(0.0, 0.0, -0.5), "centre origin on the near plane");
+    assert_close(
+        r.o,
+        eye + Vec3::new(0.0, 0.0, -0.5),
+        "centre origin on the near plane",
+    );
 
     // Right edge of the image, middle row: local (−1, 0, 1) → world (+1, 0, −1)/√2.
     let r = cam.generate_ray(Vec2::new(1.0, 0.5));
@@ -95,7 +99,11 @@ fn composed_transform_and_fov_axis_y() {
     let cam = &scene.camera;
     let r = cam.generate_ray(Vec2::new(0.5, 0.5));
     assert_close(r.d, Vec3::X, "view direction after rotation");
-    assert_close(r.o, Vec3::new(0.0, 0.0, 5.0) + Vec3::X * 0.01, "origin: translated eye + near clip");
+    assert_close(
+        r.o,
+        Vec3::new(0.0, 0.0, 5.0) + Vec3::X * 0.01,
+        "origin: translated eye + near clip",
+    );
     // Top centre: local (0, tan 30°, 1); rotation about y keeps y.
     let t = 30f32.to_radians().tan();
     let r = cam.generate_ray(Vec2::new(0.5, 0.0));
@@ -103,5 +111,9 @@ fn composed_transform_and_fov_axis_y() {
     // Right centre: local (−2t, 0, 1); R maps local x → −z (rotating +x by 90° about +y gives −z),
     // so local −x → +z.
     let r = cam.generate_ray(Vec2::new(1.0, 0.5));
-    assert_close(r.d, Vec3::new(1.0, 0.0, 2.0 * t).normalize(), "right centre");
+    assert_close(
+        r.d,
+        Vec3::new(1.0, 0.0, 2.0 * t).normalize(),
+        "right centre",
+    );
 }

@@ -18,22 +18,48 @@ fn furnace_scene(albedo: f32, max_depth: i32, filter: FilterDesc) -> Scene {
     let eye = Vec3::new(0.0, 0.0, -1.6);
     let to_world = look_at(eye, Vec3::ZERO, Vec3::Y).unwrap();
     Scene::build(SceneDescription {
-        integrator: IntegratorDesc { max_depth, ..Default::default() },
-        camera: CameraDesc { to_world, fov_x_degrees: 30.0, near_clip: 0.01, far_clip: 1e4 },
-        film: FilmDesc { width: 64, height: 64, filter },
-        sampler: SamplerDesc { sample_count: 64, seed: 1 },
+        integrator: IntegratorDesc {
+            max_depth,
+            ..Default::default()
+        },
+        camera: CameraDesc {
+            to_world,
+            fov_x_degrees: 30.0,
+            near_clip: 0.01,
+            far_clip: 1e4,
+        },
+        film: FilmDesc {
+            width: 64,
+            height: 64,
+            filter,
+        },
+        sampler: SamplerDesc {
+            sample_count: 64,
+            seed: 1,
+        },
         shapes: vec![ShapeDesc {
-            geometry: Geometry::Sphere { center: Vec3::ZERO, radius: 1.0, flip_normals: false },
+            geometry: Geometry::Sphere {
+                center: Vec3::ZERO,
+                radius: 1.0,
+                flip_normals: false,
+            },
             bsdf: Bsdf::Diffuse(Diffuse::new(Vec3::splat(albedo))),
             emission: None,
             origin: "test".into(),
         }],
-        emitters: vec![EmitterDesc::Constant { radiance: Vec3::ONE }],
+        emitters: vec![EmitterDesc::Constant {
+            radiance: Vec3::ONE,
+        }],
     })
 }
 
 fn mean_of(scene: &Scene, spp: u32) -> (f64, u64) {
-    let out = render(scene, &RenderOptions { spp, seed: 3 }, &AtomicBool::new(false), &|_| {});
+    let out = render(
+        scene,
+        &RenderOptions { spp, seed: 3 },
+        &AtomicBool::new(false),
+        &|_| {},
+    );
     (out.image.mean(), out.stats.invalid_samples)
 }
 
@@ -50,7 +76,10 @@ fn white_sphere_renders_one() {
 fn grey_sphere_renders_its_albedo() {
     for max_depth in [-1, 2, 5] {
         let (mean, _) = mean_of(&furnace_scene(0.5, max_depth, FilterDesc::Box), 64);
-        assert!((mean - 0.5).abs() < 0.5 * 0.005, "max_depth {max_depth}: mean {mean}");
+        assert!(
+            (mean - 0.5).abs() < 0.5 * 0.005,
+            "max_depth {max_depth}: mean {mean}"
+        );
     }
 }
 

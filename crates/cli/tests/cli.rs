@@ -6,7 +6,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn radia(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_radia")).args(args).output().expect("radia runs")
+    Command::new(env!("CARGO_BIN_EXE_radia"))
+        .args(args)
+        .output()
+        .expect("radia runs")
 }
 
 fn temp_dir(name: &str) -> PathBuf {
@@ -40,14 +43,30 @@ fn expect_error(name: &str, scene: &str, line: u32, needle: &str) {
     let path = dir.join("scene.xml");
     std::fs::write(&path, scene).unwrap();
     let out_path = dir.join("out.exr");
-    let out = radia(&["render", path.to_str().unwrap(), "-o", out_path.to_str().unwrap(), "-q"]);
+    let out = radia(&[
+        "render",
+        path.to_str().unwrap(),
+        "-o",
+        out_path.to_str().unwrap(),
+        "-q",
+    ]);
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "{name}: exit status {:?}", out.status);
+    assert!(
+        !out.status.success(),
+        "{name}: exit status {:?}",
+        out.status
+    );
     assert_ne!(out.status.code(), Some(101), "{name}: panicked: {stderr}");
     assert!(!stderr.contains("panicked"), "{name}: {stderr}");
     let location = format!("{}:{line}", path.display());
-    assert!(stderr.contains(&location), "{name}: expected '{location}' in: {stderr}");
-    assert!(stderr.to_lowercase().contains(needle), "{name}: expected '{needle}' in: {stderr}");
+    assert!(
+        stderr.contains(&location),
+        "{name}: expected '{location}' in: {stderr}"
+    );
+    assert!(
+        stderr.to_lowercase().contains(needle),
+        "{name}: expected '{needle}' in: {stderr}"
+    );
     assert!(!out_path.exists(), "{name}: an output file was written");
     assert!(!Path::new(&format!("{}.partial", out_path.display())).exists());
 }
@@ -90,7 +109,13 @@ fn unsupported_element_names_file_and_line() {
 
 #[test]
 fn missing_scene_file_is_an_error() {
-    let out = radia(&["render", "/nonexistent/scene.xml", "-o", "/tmp/never.exr", "-q"]);
+    let out = radia(&[
+        "render",
+        "/nonexistent/scene.xml",
+        "-o",
+        "/tmp/never.exr",
+        "-q",
+    ]);
     assert!(!out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("/nonexistent/scene.xml"), "{stderr}");
@@ -104,11 +129,24 @@ fn renders_png_and_exr() {
     std::fs::write(&path, GOOD_SCENE).unwrap();
     for ext in ["exr", "png"] {
         let out_path = dir.join(format!("out.{ext}"));
-        let out = radia(&["render", path.to_str().unwrap(), "-o", out_path.to_str().unwrap(), "-q"]);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let out = radia(&[
+            "render",
+            path.to_str().unwrap(),
+            "-o",
+            out_path.to_str().unwrap(),
+            "-q",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         assert!(std::fs::metadata(&out_path).unwrap().len() > 0);
         let stdout = String::from_utf8_lossy(&out.stdout);
-        assert!(stdout.contains("Mrays/s") && stdout.contains("invalid samples"), "{stdout}");
+        assert!(
+            stdout.contains("Mrays/s") && stdout.contains("invalid samples"),
+            "{stdout}"
+        );
     }
 }
 
@@ -121,17 +159,40 @@ fn thread_count_does_not_change_the_image() {
     for threads in ["1", "2", "3"] {
         let out_path = dir.join(format!("t{threads}.exr"));
         let out = radia(&[
-            "render", path.to_str().unwrap(), "-o", out_path.to_str().unwrap(), "-q",
-            "--threads", threads, "--spp", "20", "--seed", "7",
+            "render",
+            path.to_str().unwrap(),
+            "-o",
+            out_path.to_str().unwrap(),
+            "-q",
+            "--threads",
+            threads,
+            "--spp",
+            "20",
+            "--seed",
+            "7",
         ]);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         images.push(std::fs::read(&out_path).unwrap());
     }
     assert_eq!(images[0], images[1], "1 vs 2 threads");
     assert_eq!(images[0], images[2], "1 vs 3 threads");
     // A different seed gives a different image.
     let other = dir.join("seed8.exr");
-    radia(&["render", path.to_str().unwrap(), "-o", other.to_str().unwrap(), "-q", "--spp", "20", "--seed", "8"]);
+    radia(&[
+        "render",
+        path.to_str().unwrap(),
+        "-o",
+        other.to_str().unwrap(),
+        "-q",
+        "--spp",
+        "20",
+        "--seed",
+        "8",
+    ]);
     assert_ne!(std::fs::read(other).unwrap(), images[0]);
 }
 
@@ -140,7 +201,13 @@ fn bad_output_extension_is_an_error() {
     let dir = temp_dir("ext");
     let path = dir.join("scene.xml");
     std::fs::write(&path, GOOD_SCENE).unwrap();
-    let out = radia(&["render", path.to_str().unwrap(), "-o", dir.join("x.jpg").to_str().unwrap(), "-q"]);
+    let out = radia(&[
+        "render",
+        path.to_str().unwrap(),
+        "-o",
+        dir.join("x.jpg").to_str().unwrap(),
+        "-q",
+    ]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("x.jpg"));
 }

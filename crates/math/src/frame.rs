@@ -28,7 +28,11 @@ impl Frame {
             return Self::from_normal(n);
         }
         let s = s / len2.sqrt();
-        Self { s, t: n.cross(s), n }
+        Self {
+            s,
+            t: n.cross(s),
+            n,
+        }
     }
 
     #[inline]
@@ -69,7 +73,12 @@ mod tests {
 
     #[test]
     fn round_trip_and_orthonormality() {
-        for n in [Vec3::Z, -Vec3::Z, Vec3::X, Vec3::new(0.3, -0.4, 0.866).normalize()] {
+        for n in [
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::X,
+            Vec3::new(0.3, -0.4, 0.866).normalize(),
+        ] {
             let f = Frame::from_normal(n);
             assert!(f.s.dot(f.t).abs() < 1e-6 && f.s.dot(f.n).abs() < 1e-6);
             assert!((f.s.cross(f.t) - f.n).length() < 1e-5, "right-handed");

@@ -61,5 +61,10 @@ pub fn look_at(origin: Vec3, target: Vec3, up: Vec3) -> Option<Affine3A> {
     }
     let left = left.normalize();
     let new_up = dir.cross(left);
-    Some(Affine3A::from_cols(left.into(), new_up.into(), dir.into(), origin.into()))
+    Some(Affine3A::from_cols(
+        left.into(),
+        new_up.into(),
+        dir.into(),
+        origin.into(),
+    ))
 }

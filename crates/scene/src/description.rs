@@ -18,7 +18,11 @@ pub struct IntegratorDesc {
 
 impl Default for IntegratorDesc {
     fn default() -> Self {
-        Self { max_depth: -1, rr_depth: 5, hide_emitters: false }
+        Self {
+            max_depth: -1,
+            rr_depth: 5,
+            hide_emitters: false,
+        }
     }
 }
 
@@ -42,7 +46,11 @@ pub struct FilmDesc {
 impl Default for FilmDesc {
     fn default() -> Self {
         // hdrfilm defaults (src/films/hdrfilm.cpp)
-        Self { width: 768, height: 576, filter: FilterDesc::Gaussian { stddev: 0.5 } }
+        Self {
+            width: 768,
+            height: 576,
+            filter: FilterDesc::Gaussian { stddev: 0.5 },
+        }
     }
 }
 
@@ -67,7 +75,10 @@ pub struct SamplerDesc {
 
 impl Default for SamplerDesc {
     fn default() -> Self {
-        Self { sample_count: 4, seed: 0 }
+        Self {
+            sample_count: 4,
+            seed: 0,
+        }
     }
 }
 
@@ -90,9 +101,16 @@ pub struct Mesh {
 pub enum Geometry {
     Mesh(Mesh),
     /// Analytic sphere (`src/shapes/sphere.cpp`), outward normals unless flipped.
-    Sphere { center: Vec3, radius: f32, flip_normals: bool },
+    Sphere {
+        center: Vec3,
+        radius: f32,
+        flip_normals: bool,
+    },
     /// Analytic unit disk in the xy-plane, normal +z, mapped by `to_world` (`src/shapes/disk.cpp`).
-    Disk { to_world: Affine3A, flip_normals: bool },
+    Disk {
+        to_world: Affine3A,
+        flip_normals: bool,
+    },
 }
 
 /// A shape with its material and, if it glows, its `area` emitter.

@@ -177,7 +177,7 @@ fn bvh_agrees_with_brute_force() {
 #[test]
 #[ignore]
 fn cwbvh_agrees_with_bvh2_on_a_million_triangles() {
-    use obvhs::{aabb::Aabb, ray::RayHit, BvhBuildParams, Boundable};
+    use obvhs::{aabb::Aabb, ray::RayHit, Boundable, BvhBuildParams};
     struct B(Aabb);
     impl Boundable for B {
         fn aabb(&self) -> Aabb {
@@ -186,17 +186,32 @@ fn cwbvh_agrees_with_bvh2_on_a_million_triangles() {
     }
     let mut rng = Pcg64::seed_from_u64(7);
     let shapes = vec![
-        Shape::new(Geometry::Mesh(uv_sphere(Vec3::ZERO, 2.0, 500, 600)), 0, None),
+        Shape::new(
+            Geometry::Mesh(uv_sphere(Vec3::ZERO, 2.0, 500, 600)),
+            0,
+            None,
+        ),
         Shape::new(Geometry::Mesh(soup(&mut rng, 400_000)), 0, None),
     ];
     let accel = Accel::build(&shapes);
     assert!(accel.primitives.len() >= 1_000_000);
     let bounds = accel.primitive_bounds(&shapes);
-    let boxes: Vec<B> = bounds.iter().map(|b| B(Aabb::new(b[0].into(), b[1].into()))).collect();
-    let bvh2 = obvhs::bvh2::builder::build_bvh2(&boxes, BvhBuildParams::medium_build(), &mut Default::default());
+    let boxes: Vec<B> = bounds
+        .iter()
+        .map(|b| B(Aabb::new(b[0].into(), b[1].into())))
+        .collect();
+    let bvh2 = obvhs::bvh2::builder::build_bvh2(
+        &boxes,
+        BvhBuildParams::medium_build(),
+        &mut Default::default(),
+    );
     let rays: Vec<Ray> = (0..500_000)
         .map(|i| {
-            let o = if i % 2 == 0 { random_dir(&mut rng) * 0.5 } else { random_dir(&mut rng) * 6.0 };
+            let o = if i % 2 == 0 {
+                random_dir(&mut rng) * 0.5
+            } else {
+                random_dir(&mut rng) * 6.0
+            };
             Ray::new(o, random_dir(&mut rng), f32::INFINITY)
         })
         .collect();
@@ -210,15 +225,24 @@ fn cwbvh_agrees_with_bvh2_on_a_million_triangles() {
             bvh2.ray_traverse(oray, &mut hit, |r, id| {
                 let prim = bvh2.primitive_indices[id] as usize;
                 let rr = Ray::new(ray.o, ray.d, r.tmax);
-                accel.intersect_primitive(&shapes, &rr, prim).map_or(f32::INFINITY, |(t, _)| t)
+                accel
+                    .intersect_primitive(&shapes, &rr, prim)
+                    .map_or(f32::INFINITY, |(t, _)| t)
             });
             let b = (hit.t < f32::INFINITY).then_some(hit.t);
             if a == b {
                 return None;
             }
-            let truth = accel.intersect_brute_force(&shapes, &bounds, ray).map(|h| h.t);
+            let truth = accel
+                .intersect_brute_force(&shapes, &bounds, ray)
+                .map(|h| h.t);
             Some(format!("ray {i}: cwbvh {a:?} bvh2 {b:?} brute {truth:?}"))
         })
         .collect();
-    assert!(bad.is_empty(), "{} disagreements: {:?}", bad.len(), &bad[..bad.len().min(10)]);
+    assert!(
+        bad.is_empty(),
+        "{} disagreements: {:?}",
+        bad.len(),
+        &bad[..bad.len().min(10)]
+    );
 }
