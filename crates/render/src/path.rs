@@ -53,11 +53,12 @@ impl PathIntegrator {
     }
 
     /// Radiance arriving at the camera along `ray`.
-    pub fn li(
+    /// Generic over the sampler so its calls inline into the path loop.
+    pub fn li<S: Sampler>(
         &self,
         scene: &Scene,
         mut ray: Ray,
-        sampler: &mut dyn Sampler,
+        sampler: &mut S,
         stats: &mut PathStats,
     ) -> Spectrum {
         let mut result = Spectrum::ZERO;
@@ -179,13 +180,13 @@ impl PathIntegrator {
     /// One next-event estimation sample: L·f·cos / pdf with the MIS weight, unoccluded or 0.
     /// Delta lights need no MIS (BSDF sampling never finds them), so no BSDF pdf either.
     #[inline]
-    fn sample_emitter(
+    fn sample_emitter<S: Sampler>(
         &self,
         scene: &Scene,
         si: &SurfaceInteraction,
         sp: &ShadingPoint,
         bsdf: &radia_bsdf::Bsdf,
-        sampler: &mut dyn Sampler,
+        sampler: &mut S,
         stats: &mut PathStats,
     ) -> Spectrum {
         let u_sel = sampler.next_1d();
