@@ -229,6 +229,33 @@ impl Bsdf {
 
 /// Mean of the three channels: Mitsuba's `Texture::mean()` of an RGB constant, used for lobe
 /// sampling weights.
+/// The sample record of a model that mixes a cosine-sampled diffuse lobe with one glossy
+/// lobe (Phong, Blinn-Phong, Cook-Torrance): `wo` came from the glossy lobe when `glossy`;
+/// `pdf` is the whole mixture's density of `wo` and `value` its `eval`. `None` when the
+/// density is zero or not finite.
+#[inline]
+pub(crate) fn mixture_sample(
+    wo: Vec3,
+    glossy: bool,
+    pdf: f32,
+    value: impl FnOnce() -> Spectrum,
+) -> Option<BsdfSample> {
+    if !(pdf > 0.0) || !pdf.is_finite() {
+        return None;
+    }
+    Some(BsdfSample {
+        wo,
+        weight: value() / pdf,
+        pdf,
+        eta: 1.0,
+        lobe: if glossy {
+            LobeFlags::GLOSSY_REFLECTION
+        } else {
+            LobeFlags::DIFFUSE_REFLECTION
+        },
+    })
+}
+
 #[inline]
 pub(crate) fn mean(c: Spectrum) -> f32 {
     (c.x + c.y + c.z) * (1.0 / 3.0)

@@ -119,20 +119,7 @@ impl Phong {
             warp::square_to_cosine_hemisphere(u2)
         };
         let pdf = self.pdf(sp, wi, wo);
-        if !(pdf > 0.0) || !pdf.is_finite() {
-            return None;
-        }
-        Some(BsdfSample {
-            wo,
-            weight: self.eval(sp, wi, wo) / pdf,
-            pdf,
-            eta: 1.0,
-            lobe: if specular {
-                LobeFlags::GLOSSY_REFLECTION
-            } else {
-                LobeFlags::DIFFUSE_REFLECTION
-            },
-        })
+        crate::mixture_sample(wo, specular, pdf, || self.eval(sp, wi, wo))
     }
 }
 
