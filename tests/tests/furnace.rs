@@ -11,6 +11,7 @@
 use glam::Vec3;
 use radia_bsdf::{Bsdf, Diffuse};
 use radia_render::{render, RenderOptions};
+use radia_sampling::SamplerKind;
 use radia_scene::*;
 use std::sync::atomic::AtomicBool;
 
@@ -34,6 +35,7 @@ fn furnace_scene(albedo: f32, max_depth: i32, filter: FilterDesc) -> Scene {
             filter,
         },
         sampler: SamplerDesc {
+            kind: SamplerKind::Independent,
             sample_count: 64,
             seed: 1,
         },
@@ -54,9 +56,17 @@ fn furnace_scene(albedo: f32, max_depth: i32, filter: FilterDesc) -> Scene {
 }
 
 fn mean_of(scene: &Scene, spp: u32) -> (f64, u64) {
+    mean_with(scene, spp, SamplerKind::DEFAULT)
+}
+
+fn mean_with(scene: &Scene, spp: u32, sampler: SamplerKind) -> (f64, u64) {
     let out = render(
         scene,
-        &RenderOptions { spp, seed: 3 },
+        &RenderOptions {
+            spp,
+            seed: 3,
+            sampler,
+        },
         &AtomicBool::new(false),
         &|_| {},
     );
@@ -66,9 +76,12 @@ fn mean_of(scene: &Scene, spp: u32) -> (f64, u64) {
 #[test]
 fn white_sphere_renders_one() {
     for filter in [FilterDesc::Box, FilterDesc::Gaussian { stddev: 0.5 }] {
-        let (mean, invalid) = mean_of(&furnace_scene(1.0, -1, filter), 64);
-        assert_eq!(invalid, 0);
-        assert!((mean - 1.0).abs() < 0.005, "mean {mean}");
+        for name in SamplerKind::NAMES {
+            let kind = SamplerKind::from_name(name).unwrap();
+            let (mean, invalid) = mean_with(&furnace_scene(1.0, -1, filter), 64, kind);
+            assert_eq!(invalid, 0);
+            assert!((mean - 1.0).abs() < 0.005, "{name}: mean {mean}");
+        }
     }
 }
 

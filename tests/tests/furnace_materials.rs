@@ -33,6 +33,7 @@ use radia_bsdf::{
     RoughDielectric, ShadingPoint, ThinDielectric,
 };
 use radia_render::{render, RenderOptions};
+use radia_sampling::SamplerKind;
 use radia_scene::*;
 use std::sync::atomic::AtomicBool;
 
@@ -57,6 +58,7 @@ fn scene(bsdf: Bsdf, spp: u32) -> Scene {
             filter: FilterDesc::Box,
         },
         sampler: SamplerDesc {
+            kind: SamplerKind::Independent,
             sample_count: spp,
             seed: 1,
         },
@@ -81,7 +83,12 @@ fn scene(bsdf: Bsdf, spp: u32) -> Scene {
 fn render_pixels(scene: &Scene, spp: u32) -> (Vec<f64>, u64) {
     let out = render(
         scene,
-        &RenderOptions { spp, seed: 7 },
+        &RenderOptions {
+            spp,
+            seed: 7,
+            // The tolerance is in standard errors estimated as for independent pixels.
+            sampler: SamplerKind::Independent,
+        },
         &AtomicBool::new(false),
         &|_| {},
     );

@@ -7,7 +7,8 @@
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use radia_render::{image_io::write_image, render, RenderOptions};
-use radia_scene::{load_mitsuba_xml, LightSamplerKind, Scene};
+use radia_sampling::SamplerKind;
+use radia_scene::{load_mitsuba_xml, FilterDesc, LightSamplerKind, Scene};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -49,6 +50,16 @@ enum Command {
         /// No progress bar.
         #[arg(short, long)]
         quiet: bool,
+        /// The sampler (overrides the scene's): independent, stratified, multijitter,
+        /// orthogonal, ldsampler (Mitsuba's) or sobol (radia's default when a scene names none).
+        #[arg(long, value_name = "NAME", value_parser = parse_sampler)]
+        sampler: Option<SamplerKind>,
+        /// Film size (overrides the scene's film): WIDTHxHEIGHT, or one number for a square.
+        #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
+        resolution: Option<(u32, u32)>,
+        /// Reconstruction filter (overrides the scene's film): box, or gaussian (stddev 0.5).
+        #[arg(long, value_name = "box|gaussian", value_parser = parse_filter)]
+        rfilter: Option<FilterDesc>,
         /// How next-event estimation chooses a light: uniform (Mitsuba's choice), power, or
         /// bvh (a light BVH that accounts for distance and orientation; the default).
         #[arg(long, value_name = "uniform|power|bvh")]
@@ -77,6 +88,9 @@ fn run(cli: Cli) -> Result<(), String> {
         define,
         quiet,
         light_sampler,
+        sampler,
+        resolution,
+        rfilter,
     } = cli.command;
     let defines = define
         .iter()
@@ -112,25 +126,45 @@ fn run(cli: Cli) -> Result<(), String> {
 
     let t_load = Instant::now();
     let desc = load_mitsuba_xml(&scene_path, &defines).map_err(|e| e.to_string())?;
+    let mut desc = desc;
+    if let Some((w, h)) = resolution {
+        desc.film.width = w;
+        desc.film.height = h;
+    }
+    if let Some(f) = rfilter {
+        desc.film.filter = f;
+    }
     let mut scene = Scene::build(desc);
     if let Some(kind) = light_sampler {
         scene.set_light_sampler(kind);
     }
     let load_secs = t_load.elapsed().as_secs_f64();
+    let sampler = sampler.unwrap_or(scene.sampler.kind);
+    let asked = spp.unwrap_or(scene.sampler.sample_count).max(1);
     let options = RenderOptions {
-        spp: spp.unwrap_or(scene.sampler.sample_count).max(1),
+        // As Mitsuba's samplers do, round to the nearest count the sampler can stratify.
+        spp: sampler.round_sample_count(asked),
         seed: seed.unwrap_or(scene.sampler.seed),
+        sampler,
     };
+    if options.spp != asked {
+        eprintln!(
+            "radia: warning: the {} sampler renders {} spp, not {asked} (Mitsuba rounds the same way)",
+            sampler.name(),
+            options.spp
+        );
+    }
     let (w, h) = (scene.film.width, scene.film.height);
     eprintln!(
-        "radia: loaded {} in {:.3} s: {} primitives, {} emitters, {}x{} at {} spp",
+        "radia: loaded {} in {:.3} s: {} primitives, {} emitters, {}x{} at {} spp ({} sampler)",
         scene_path.display(),
         load_secs,
         scene.primitive_count(),
         scene.emitters.len(),
         w,
         h,
-        options.spp
+        options.spp,
+        sampler.name()
     );
 
     let cancel = Arc::new(AtomicBool::new(false));
@@ -182,4 +216,35 @@ fn run(cli: Cli) -> Result<(), String> {
         output.display()
     );
     Ok(())
+}
+
+fn parse_sampler(s: &str) -> Result<SamplerKind, String> {
+    SamplerKind::from_name(s).ok_or_else(|| {
+        format!(
+            "unknown sampler '{s}' (one of: {})",
+            SamplerKind::NAMES.join(", ")
+        )
+    })
+}
+
+fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let parse = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&n| n > 0)
+            .ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT with positive integers"))
+    };
+    match s.split_once(['x', 'X']) {
+        Some((w, h)) => Ok((parse(w)?, parse(h)?)),
+        None => parse(s).map(|n| (n, n)),
+    }
+}
+
+fn parse_filter(s: &str) -> Result<FilterDesc, String> {
+    match s {
+        "box" => Ok(FilterDesc::Box),
+        "gaussian" => Ok(FilterDesc::Gaussian { stddev: 0.5 }),
+        _ => Err(format!("unknown filter '{s}' (box or gaussian)")),
+    }
 }

@@ -5,8 +5,31 @@
 use glam::Vec3;
 use radia_bsdf::ShadingPoint;
 use radia_math::{max_component, Ray, Spectrum};
-use radia_sampling::{mis::power_heuristic, Sampler};
+use radia_sampling::{mis::power_heuristic, SampleStream, Sampler};
 use radia_scene::{LightContext, Scene, SurfaceInteraction};
+
+/// The sample dimensions of a path (see `radia_sampling::sampler`): the camera's block, then
+/// one block of [`BOUNCE_DIMS`] values per bounce, whether or not a bounce uses them all, so
+/// that each decision of each bounce always draws from the same stratified dimensions.
+pub mod layout {
+    /// Position in the pixel (2D).
+    pub const FILM: u32 = 0;
+    /// First dimension of bounce 0.
+    pub const BOUNCES: u32 = 4;
+    pub const BOUNCE_DIMS: u32 = 8;
+    /// Offsets within a bounce's block. The light's position and choice share one 4-value
+    /// block, the BSDF's direction, lobe and the roulette the next.
+    pub const LIGHT_POSITION: u32 = 0;
+    pub const LIGHT_CHOICE: u32 = 2;
+    pub const BSDF_DIRECTION: u32 = 4;
+    pub const BSDF_LOBE: u32 = 6;
+    pub const ROULETTE: u32 = 7;
+
+    #[inline]
+    pub fn bounce(depth: u32) -> u32 {
+        BOUNCES + depth.saturating_mul(BOUNCE_DIMS)
+    }
+}
 
 /// Counters a render thread accumulates.
 #[derive(Clone, Copy, Debug, Default)]
@@ -58,7 +81,7 @@ impl PathIntegrator {
         &self,
         scene: &Scene,
         mut ray: Ray,
-        sampler: &mut S,
+        sampler: &mut SampleStream<'_, S>,
         stats: &mut PathStats,
     ) -> Spectrum {
         let mut result = Spectrum::ZERO;
@@ -115,12 +138,15 @@ impl PathIntegrator {
 
             // ---- Emitter sampling (next-event estimation) ----
             if bsdf.flags().has_smooth() && self.has_lights {
+                sampler.seek(layout::bounce(depth) + layout::LIGHT_POSITION);
                 result += beta * self.sample_emitter(scene, &si, &sp, bsdf, sampler, stats);
             }
 
             // ---- BSDF sampling ----
-            let u1 = sampler.next_1d();
+            let block = layout::bounce(depth);
+            sampler.seek(block + layout::BSDF_DIRECTION);
             let u2 = sampler.next_2d();
+            let u1 = sampler.next_1d();
             let Some(bs) = bsdf.sample(&sp, si.wi, u1, u2) else {
                 break;
             };
@@ -143,6 +169,7 @@ impl PathIntegrator {
             let beta_max = max_component(beta);
             if depth >= self.rr_depth {
                 let q = (beta_max * eta * eta).min(0.95);
+                sampler.seek(block + layout::ROULETTE);
                 if !(sampler.next_1d() < q) {
                     break;
                 }
@@ -186,11 +213,11 @@ impl PathIntegrator {
         si: &SurfaceInteraction,
         sp: &ShadingPoint,
         bsdf: &radia_bsdf::Bsdf,
-        sampler: &mut S,
+        sampler: &mut SampleStream<'_, S>,
         stats: &mut PathStats,
     ) -> Spectrum {
-        let u_sel = sampler.next_1d();
         let u = sampler.next_2d();
+        let u_sel = sampler.next_1d();
         let ctx = LightContext {
             p: si.p,
             n: si.frame.n,

@@ -4,9 +4,9 @@
 //! whatever the number of threads.
 
 use crate::film::{Film, Filter, Image};
-use crate::path::{PathIntegrator, PathStats};
+use crate::path::{layout, PathIntegrator, PathStats};
 use glam::{UVec2, Vec2};
-use radia_sampling::{IndependentSampler, Sampler};
+use radia_sampling::{with_sampler, AnySampler, PixelKey, SampleStream, Sampler, SamplerKind};
 use radia_scene::Scene;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -17,8 +17,10 @@ const PASS_SPP: u32 = 16;
 
 #[derive(Clone, Copy, Debug)]
 pub struct RenderOptions {
+    /// Samples per pixel asked for; the sampler may round it ([`SamplerKind::round_sample_count`]).
     pub spp: u32,
     pub seed: u64,
+    pub sampler: SamplerKind,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -51,6 +53,19 @@ pub fn render(
     cancel: &AtomicBool,
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderOutput {
+    let sampler = AnySampler::new(options.sampler, options.spp);
+    with_sampler!(&sampler, s => render_with(scene, s, options.seed, cancel, progress))
+}
+
+/// [`render`] with a concrete sampler, so that its calls inline into the path loop.
+fn render_with<S: Sampler>(
+    scene: &Scene,
+    sampler: &S,
+    seed: u64,
+    cancel: &AtomicBool,
+    progress: &(dyn Fn(u64) + Sync),
+) -> RenderOutput {
+    let spp = sampler.sample_count();
     let (w, h) = (scene.film.width, scene.film.height);
     let filter = Filter::new(scene.film.filter);
     let margin = (filter.radius() - 0.5).ceil().max(0.0) as i32;
@@ -64,8 +79,8 @@ pub fn render(
     let done = AtomicU64::new(0);
 
     let mut spp_start = 0;
-    while spp_start < options.spp {
-        let spp_end = (spp_start + PASS_SPP).min(options.spp);
+    while spp_start < spp {
+        let spp_end = (spp_start + PASS_SPP).min(spp);
         let results: Vec<Option<TileResult>> = tiles
             .par_iter()
             .map(|&(x0, y0)| {
@@ -80,17 +95,18 @@ pub fn render(
                     th + 2 * margin as u32,
                     filter,
                 );
-                let mut sampler = IndependentSampler::new(options.seed);
                 let mut pstats = PathStats::default();
                 let mut invalid = 0;
                 for y in y0..y0 + th {
                     for x in x0..x0 + tw {
+                        let key = PixelKey::new(seed, UVec2::new(x, y));
                         for s in spp_start..spp_end {
-                            sampler.start_pixel_sample(UVec2::new(x, y), s);
-                            let pos = Vec2::new(x as f32, y as f32) + sampler.next_2d();
+                            let mut stream = SampleStream::new(sampler, key, s);
+                            stream.seek(layout::FILM);
+                            let pos = Vec2::new(x as f32, y as f32) + stream.next_2d();
                             let film_pos = pos / Vec2::new(w as f32, h as f32);
                             let ray = scene.camera.generate_ray(film_pos);
-                            let l = integrator.li(scene, ray, &mut sampler, &mut pstats);
+                            let l = integrator.li(scene, ray, &mut stream, &mut pstats);
                             if l.is_finite() {
                                 tile.add_sample(pos, l);
                             } else {

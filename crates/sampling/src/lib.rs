@@ -14,7 +14,10 @@ mod sampler;
 pub mod warp;
 
 pub use discrete::DiscreteDistribution;
-pub use sampler::{IndependentSampler, Sampler};
+pub use sampler::{
+    hash4, mix64, unit_f32, AnySampler, IndependentSampler, PixelKey, SampleStream, Sampler,
+    SamplerKind, SobolSampler,
+};
 
 /// Significance level of each chi-square test in this crate's own suite that is expected to
 /// pass, Šidák-corrected so that the suite as a whole falsely fails with probability 1%.

@@ -4,6 +4,7 @@
 use glam::{Affine3A, Vec2, Vec3};
 use radia_bsdf::Bsdf;
 use radia_math::Spectrum;
+use radia_sampling::SamplerKind;
 
 /// Mitsuba's `path` integrator parameters (`src/integrators/path.cpp`).
 #[derive(Clone, Debug, PartialEq)]
@@ -67,15 +68,22 @@ pub struct CameraDesc {
     pub far_clip: f32,
 }
 
+/// The sensor's sampler (`src/samplers/*.cpp`). `sample_count` is as the scene gives it; the
+/// renderer rounds it as the sampler requires.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SamplerDesc {
+    pub kind: SamplerKind,
     pub sample_count: u32,
     pub seed: u64,
 }
 
 impl Default for SamplerDesc {
+    /// A scene that names no sampler: Mitsuba's default count (4 spp) with radia's default
+    /// sampler ([`SamplerKind::DEFAULT`], Owen-scrambled Sobol; Mitsuba's would be
+    /// `independent`: same expected image, more noise).
     fn default() -> Self {
         Self {
+            kind: SamplerKind::DEFAULT,
             sample_count: 4,
             seed: 0,
         }

@@ -13,6 +13,7 @@ use crate::{
 };
 use glam::Affine3A;
 use radia_bsdf::Bsdf;
+use radia_sampling::SamplerKind;
 use std::collections::HashMap;
 
 /// State shared by the plugin builders.
@@ -388,15 +389,34 @@ fn build_rfilter(b: &Builder<'_>, idx: usize) -> Result<FilterDesc, LoadError> {
     Ok(f)
 }
 
-/// `independent` (`src/samplers/independent.cpp`, `Sampler` in `src/render/sampler.cpp`).
+/// Mitsuba's samplers (`src/samplers/*.cpp`; `sample_count` and `seed` from `Sampler` in
+/// `src/render/sampler.cpp`, `jitter` and `strength` from the plugins) and radia's `sobol`.
 fn build_sampler(b: &Builder<'_>, idx: usize) -> Result<SamplerDesc, LoadError> {
     let mut p = Props::new(b.doc, idx);
-    if p.node.plugin != "independent" {
-        return Err(p.err(format!(
-            "unsupported sampler plugin type \"{}\" (radia supports: independent)",
-            p.node.plugin
-        )));
-    }
+    let kind = match SamplerKind::from_name(&p.node.plugin) {
+        Some(SamplerKind::Stratified { .. }) => SamplerKind::Stratified {
+            jitter: p.boolean("jitter", true)?,
+        },
+        Some(SamplerKind::Multijitter { .. }) => SamplerKind::Multijitter {
+            jitter: p.boolean("jitter", true)?,
+        },
+        Some(SamplerKind::Orthogonal { .. }) => {
+            let jitter = p.boolean("jitter", true)?;
+            let strength = p.int("strength", 2, 2, 16)?;
+            SamplerKind::Orthogonal {
+                jitter,
+                strength: strength as u32,
+            }
+        }
+        Some(kind) => kind,
+        None => {
+            return Err(p.err(format!(
+                "unsupported sampler plugin type \"{}\" (radia supports: {})",
+                p.node.plugin,
+                SamplerKind::NAMES.join(", ")
+            )))
+        }
+    };
     let sample_count = p.int("sample_count", 4, U32.0, U32.1)?;
     if sample_count == 0 {
         return Err(p.err_at(p.pos_of("sample_count"), "sample_count must be at least 1"));
@@ -404,6 +424,7 @@ fn build_sampler(b: &Builder<'_>, idx: usize) -> Result<SamplerDesc, LoadError> 
     let seed = p.int("seed", 0, U32.0, U32.1)?;
     p.finish()?;
     Ok(SamplerDesc {
+        kind,
         sample_count: sample_count as u32,
         seed: seed as u64,
     })

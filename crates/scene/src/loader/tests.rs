@@ -494,6 +494,7 @@ fn loader_film_sampler_integrator() {
     assert_eq!(
         s.sampler,
         SamplerDesc {
+            kind: radia_sampling::SamplerKind::Independent,
             sample_count: 16,
             seed: 7
         }
@@ -1426,7 +1427,7 @@ fn loader_unsupported_and_unknown() {
     expect_err(
         load(
             "unknown-sampler",
-            r#"<sensor type="perspective"><sampler type="stratified"/></sensor>"#,
+            r#"<sensor type="perspective"><sampler type="halton"/></sensor>"#,
         ),
         "unsupported sampler plugin type",
     );

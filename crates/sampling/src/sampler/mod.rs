@@ -1,0 +1,274 @@
+//! Where sample values come from.
+//!
+//! A [`Sampler`] is a pure function: the value of dimension `dim` of sample `index` of a
+//! pixel, given the pixel's [`PixelKey`] (a hash of the render seed and the pixel). Nothing
+//! depends on which thread asks, in which order, or on how a render is split into passes or
+//! sample ranges, so the same seed and sample count give the same image bit for bit however it
+//! is rendered. [`SampleStream`] walks the dimensions of one pixel sample for the integrator.
+//!
+//! # Samplers
+//! Mitsuba 3's samplers (`src/samplers/*.cpp`), with its parameters and rounding of the
+//! sample count, and radia's own `sobol`:
+//!
+//! | XML `type` | what | sample count rounded to |
+//! |---|---|---|
+//! | `independent` | uniform random values | as given |
+//! | `stratified` | one jittered stratum per sample in every 1D and 2D dimension | a square |
+//! | `multijitter` | correlated multi-jittered 2D points (Kensler 2013) | a near-square rectangle |
+//! | `orthogonal` | orthogonal-array sampling (Jarosz et al. 2019) | the square of a prime |
+//! | `ldsampler` | scrambled (0, 2)-sequence points | a power-of-two square |
+//! | `sobol` (radia) | Owen-scrambled Sobol (Burley 2020), 4D sets with per-set shuffles | as given |
+//!
+//! # Dimension layout
+//! Dimensions are numbered by value: a 2D request at `dim` uses values `dim` and `dim + 1`.
+//! The path integrator gives every bounce the same fixed block of values (`render/path.rs`),
+//! so each bounce's light, BSDF and roulette decisions keep their stratification whatever
+//! happened at earlier bounces. [`SobolSampler`] takes each aligned block of four values as
+//! one 4D Sobol set.
+
+mod independent;
+mod sobol;
+
+pub use independent::IndependentSampler;
+pub use sobol::SobolSampler;
+
+use glam::{UVec2, Vec2};
+
+/// A pixel's identity for the sample generators: a hash of the render seed and the pixel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PixelKey(pub u32);
+
+impl PixelKey {
+    #[inline]
+    pub fn new(seed: u64, pixel: UVec2) -> Self {
+        let p = ((pixel.y as u64) << 32) | pixel.x as u64;
+        Self(mix64(seed ^ mix64(p ^ 0x5851_f42d_4c95_7f2d)) as u32)
+    }
+}
+
+/// Sample values as a function of (pixel, sample index, dimension). Values lie in [0, 1).
+pub trait Sampler: Sync + Send {
+    /// The number of samples per pixel the sequence is stratified over.
+    fn sample_count(&self) -> u32;
+    fn get_1d(&self, key: PixelKey, index: u32, dim: u32) -> f32;
+    /// Values `dim` and `dim + 1`, stratified together.
+    fn get_2d(&self, key: PixelKey, index: u32, dim: u32) -> Vec2;
+}
+
+/// One pixel sample's walk through its dimensions.
+pub struct SampleStream<'a, S: ?Sized> {
+    sampler: &'a S,
+    key: PixelKey,
+    index: u32,
+    dim: u32,
+}
+
+impl<'a, S: Sampler + ?Sized> SampleStream<'a, S> {
+    #[inline]
+    pub fn new(sampler: &'a S, key: PixelKey, index: u32) -> Self {
+        Self {
+            sampler,
+            key,
+            index,
+            dim: 0,
+        }
+    }
+
+    /// Continues at dimension `dim` (the start of a block of the integrator's layout).
+    #[inline]
+    pub fn seek(&mut self, dim: u32) {
+        self.dim = dim;
+    }
+
+    #[inline]
+    pub fn next_1d(&mut self) -> f32 {
+        let v = self.sampler.get_1d(self.key, self.index, self.dim);
+        self.dim += 1;
+        v
+    }
+
+    #[inline]
+    pub fn next_2d(&mut self) -> Vec2 {
+        let v = self.sampler.get_2d(self.key, self.index, self.dim);
+        self.dim += 2;
+        v
+    }
+}
+
+/// The sampler plugins a scene can name (Mitsuba's names, plus radia's `sobol`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SamplerKind {
+    Independent,
+    Stratified { jitter: bool },
+    Multijitter { jitter: bool },
+    Orthogonal { jitter: bool, strength: u32 },
+    LowDiscrepancy,
+    Sobol,
+}
+
+impl SamplerKind {
+    /// radia's sampler when a scene names none: Owen-scrambled Sobol, the best of them on
+    /// every scene of the benchmark (`validation/benchmark.py`), at any sample count.
+    pub const DEFAULT: SamplerKind = SamplerKind::Sobol;
+
+    /// The plugin name (`<sampler type="...">`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            SamplerKind::Independent => "independent",
+            SamplerKind::Stratified { .. } => "stratified",
+            SamplerKind::Multijitter { .. } => "multijitter",
+            SamplerKind::Orthogonal { .. } => "orthogonal",
+            SamplerKind::LowDiscrepancy => "ldsampler",
+            SamplerKind::Sobol => "sobol",
+        }
+    }
+
+    /// The kind with default parameters named `name`, if there is one.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Some(match name {
+            "independent" => SamplerKind::Independent,
+            "stratified" => SamplerKind::Stratified { jitter: true },
+            "multijitter" => SamplerKind::Multijitter { jitter: true },
+            "orthogonal" => SamplerKind::Orthogonal {
+                jitter: true,
+                strength: 2,
+            },
+            "ldsampler" => SamplerKind::LowDiscrepancy,
+            "sobol" => SamplerKind::Sobol,
+            _ => return None,
+        })
+    }
+
+    pub const NAMES: [&'static str; 6] = [
+        "independent",
+        "stratified",
+        "multijitter",
+        "orthogonal",
+        "ldsampler",
+        "sobol",
+    ];
+
+    /// The sample count this sampler renders when `spp` are asked for (Mitsuba's
+    /// `set_sample_count` rounding).
+    pub fn round_sample_count(&self, spp: u32) -> u32 {
+        let spp = spp.max(1);
+        match self {
+            SamplerKind::Independent | SamplerKind::Sobol => spp,
+            // stratified.cpp: the smallest square ≥ spp.
+            SamplerKind::Stratified { .. } => {
+                let r = ceil_sqrt(spp);
+                r * r
+            }
+            // multijitter.cpp: ry = ⌊√spp⌋, rx = ⌈spp / ry⌉.
+            SamplerKind::Multijitter { .. } => {
+                let ry = floor_sqrt(spp).max(1);
+                spp.div_ceil(ry) * ry
+            }
+            // orthogonal.cpp: the square of the smallest prime p ≥ 2 with p² ≥ spp.
+            SamplerKind::Orthogonal { .. } => {
+                let mut p = 2;
+                while p * p < spp || !is_prime(p) {
+                    p += 1;
+                }
+                p * p
+            }
+            // ldsampler.cpp: res = 2, then res = next power of two above res until res² ≥ spp.
+            SamplerKind::LowDiscrepancy => {
+                let mut r = 2u32;
+                while r * r < spp {
+                    r = (r + 1).next_power_of_two();
+                }
+                r * r
+            }
+        }
+    }
+}
+
+fn floor_sqrt(n: u32) -> u32 {
+    let mut r = (n as f64).sqrt() as u32;
+    while r * r > n {
+        r -= 1;
+    }
+    while (r + 1) * (r + 1) <= n {
+        r += 1;
+    }
+    r
+}
+
+fn ceil_sqrt(n: u32) -> u32 {
+    let r = floor_sqrt(n);
+    if r * r == n {
+        r
+    } else {
+        r + 1
+    }
+}
+
+fn is_prime(x: u32) -> bool {
+    (2..=x / 2).all(|i| x % i != 0)
+}
+
+/// Every sampler, for dispatch once per render: the path loop is then generic over the
+/// concrete sampler and its calls inline.
+#[derive(Clone, Debug)]
+pub enum AnySampler {
+    Independent(IndependentSampler),
+    Sobol(SobolSampler),
+}
+
+impl AnySampler {
+    /// The sampler of `kind` for `spp` samples per pixel (rounded as
+    /// [`SamplerKind::round_sample_count`]).
+    pub fn new(kind: SamplerKind, spp: u32) -> Self {
+        let n = kind.round_sample_count(spp);
+        match kind {
+            SamplerKind::Independent => AnySampler::Independent(IndependentSampler::new(n)),
+            SamplerKind::Sobol => AnySampler::Sobol(SobolSampler::new(n)),
+            // Until the stratified family lands, unreachable from the loader.
+            _ => AnySampler::Sobol(SobolSampler::new(n)),
+        }
+    }
+
+    pub fn sample_count(&self) -> u32 {
+        match self {
+            AnySampler::Independent(s) => s.sample_count(),
+            AnySampler::Sobol(s) => s.sample_count(),
+        }
+    }
+}
+
+/// Calls `$body` with `$s` bound to the concrete sampler inside an [`AnySampler`].
+#[macro_export]
+macro_rules! with_sampler {
+    ($any:expr, $s:ident => $body:expr) => {
+        match $any {
+            $crate::AnySampler::Independent($s) => $body,
+            $crate::AnySampler::Sobol($s) => $body,
+        }
+    };
+}
+
+/// SplitMix64's finalizer: a bijection of u64 that decorrelates nearby keys.
+#[inline]
+pub fn mix64(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// 64 random bits for (key, index, dim, stream): distinct inputs give independent outputs.
+#[inline]
+pub fn hash4(key: PixelKey, index: u32, dim: u32, stream: u32) -> u64 {
+    let a = ((key.0 as u64) << 32) | index as u64;
+    let b = ((dim as u64) << 32) | stream as u64;
+    mix64(a ^ mix64(b.wrapping_add(0x9e37_79b9_7f4a_7c15)))
+}
+
+/// The upper 24 bits of `bits` as a float in [0, 1) (never 1.0).
+#[inline]
+pub fn unit_f32(bits: u32) -> f32 {
+    (bits >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+}
+
+#[cfg(test)]
+mod tests;
