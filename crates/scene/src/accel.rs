@@ -1,9 +1,11 @@
 //! Ray queries: the BVH over every primitive of the scene (obvhs' compressed wide BVH8) with
 //! watertight triangle intersection and analytic spheres and disks.
 
+mod wide;
+
 use crate::shape::{Shape, ShapeKind};
-use glam::{Vec2, Vec3, Vec3A};
-use obvhs::{aabb::Aabb, cwbvh::CwBvh, ray::RayHit, Boundable, BvhBuildParams};
+use glam::{Vec2, Vec3};
+use obvhs::{aabb::Aabb, cwbvh::CwBvh, Boundable, BvhBuildParams};
 use radia_math::Ray;
 use std::time::Duration;
 
@@ -254,17 +256,16 @@ impl Accel {
             BvhBuildParams::medium_build(),
             &mut Duration::default(),
         );
+        assert!(
+            wide::max_depth(&bvh) < wide::STACK_SIZE,
+            "BVH deeper than the traversal stack"
+        );
         let primitives = bvh
             .primitive_indices
             .iter()
             .map(|&i| prims[i as usize])
             .collect();
         Self { bvh, primitives }
-    }
-
-    #[inline]
-    fn to_obvhs(ray: &Ray) -> obvhs::ray::Ray {
-        obvhs::ray::Ray::new(Vec3A::from(ray.o), Vec3A::from(ray.d), 0.0, ray.t_max)
     }
 
     #[inline(always)]
@@ -296,24 +297,14 @@ impl Accel {
             return None;
         }
         let wray = WatertightRay::new(ray);
-        let mut hit = RayHit::none();
+        let node_ray = wide::NodeRay::new(ray.o, ray.d, ray.t_max);
         let mut bary = Vec2::ZERO;
-        let found = self
-            .bvh
-            .ray_traverse(Self::to_obvhs(ray), &mut hit, |r, prim| {
-                match self.intersect_prim(shapes, &wray, ray, prim, r.tmax) {
-                    Some((t, b)) => {
-                        bary = b;
-                        t
-                    }
-                    None => f32::INFINITY,
-                }
-            });
-        found.then_some(Hit {
-            t: hit.t,
-            prim: hit.primitive_id,
-            bary,
-        })
+        let (prim, t) = wide::traverse(&self.bvh, &node_ray, ray.t_max, false, |prim, t_max| {
+            let (t, b) = self.intersect_prim(shapes, &wray, ray, prim as usize, t_max)?;
+            bary = b;
+            Some(t)
+        })?;
+        Some(Hit { t, prim, bary })
     }
 
     /// True when something blocks `ray` in (0, ray.t_max). Stops at the first hit.
@@ -323,10 +314,12 @@ impl Accel {
             return false;
         }
         let wray = WatertightRay::new(ray);
-        !self.bvh.ray_traverse_miss(Self::to_obvhs(ray), |r, prim| {
-            self.intersect_prim(shapes, &wray, ray, prim, r.tmax)
-                .map_or(f32::INFINITY, |(t, _)| t)
+        let node_ray = wide::NodeRay::new(ray.o, ray.d, ray.t_max);
+        wide::traverse(&self.bvh, &node_ray, ray.t_max, true, |prim, t_max| {
+            self.intersect_prim(shapes, &wray, ray, prim as usize, t_max)
+                .map(|(t, _)| t)
         })
+        .is_some()
     }
 
     /// The exact test of one primitive (index into [`Accel::primitives`]) against `ray`.
