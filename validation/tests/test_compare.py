@@ -259,6 +259,29 @@ class SceneOverrides(unittest.TestCase):
                             "--sampler", "nope", "--no-report"], capture_output=True, text=True)
         self.assertEqual(p.returncode, 2, p.stdout + p.stderr)
 
+    def test_benchmark_smoke(self):
+        """benchmark.py end to end with the fake radia, on the no-defaults scene."""
+        tmp = tmpdir(self)
+        out = os.path.join(tmp, "bench")
+        p = subprocess.run([PY, BENCHMARK, NODEFAULTS, "--res", "8", "--spp", "5", "--repeats", "1",
+                            "--ref-spp", "64", "--variants", "scalar_rgb", "--radia", fake_radia(tmp),
+                            "--radia-samplers", "independent,orthogonal", "--mitsuba-samplers",
+                            "independent,ldsampler", "--radia-alt", f"before={fake_radia(tmp)}",
+                            "--out", out], capture_output=True, text=True)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+        for f in ("benchmark.md", "benchmark.csv", "benchmark.html", "nodefaults.png"):
+            self.assertTrue(os.path.exists(os.path.join(out, f)), f)
+        with open(os.path.join(out, "benchmark.md")) as f:
+            md = f.read()
+        self.assertIn("Best vs best", md)
+        self.assertIn("Same estimator", md)
+        self.assertIn("radia[before]", md)
+        with open(os.path.join(out, "benchmark.csv")) as f:
+            rows = f.read()
+        self.assertIn(",orthogonal,", rows)
+        self.assertIn(",orthogonal,2,8,5,9,", rows)   # orthogonal renders 9 spp when asked for 5
+        self.assertIn(",ldsampler,2,8,5,16,", rows)   # ldsampler 16
+
 
 class CommandLine(unittest.TestCase):
     def fake_radia(self, tmp):
