@@ -26,7 +26,8 @@ Timings (wall clock, time.perf_counter):
                      of the same spp on the loaded scene, kernels compiled); scalar: the only render
            cold    = first mi.render after loading (JIT: tracing, compiling or loading
                      the kernel from Dr.Jit's cache; after the first repeat, Dr.Jit's
-                     in-process cache)
+                     in-process cache); the median over repeats, as the ladder had it.
+                     CSV render_first_s: the first repeat's alone
            total   = load + cold render (the Python interpreter and `import mitsuba`
                      are not included; they are printed once as import_s)
 efficiency (the headline) uses total; efficiency_render uses render.
@@ -329,7 +330,7 @@ def measure_mitsuba(scene, res, spp, sampler, variant, threads, ref, repeats, de
     row = dict(renderer=f"mitsuba-{variant}", binary=variant, sampler=sampler, spp_requested=spp,
                spp=spps[-1] if len(spps) == 1 else ",".join(map(str, spps)), repeats=len(loads),
                load_s=load, render_s=warm, render_cold_s=cold, total_s=load + cold,
-               mrays_s=None, import_s=import_s)
+               render_first_s=colds[0], mrays_s=None, import_s=import_s)
     row["msamples_s"] = res * res * spps[-1] / warm / 1e6
     return _finish_row(row, rels)
 
@@ -544,7 +545,7 @@ def efficiency_main(a):
         images["Best vs best"] = ["ratios.png"]
 
     fields = ["scene", "renderer", "binary", "sampler", "threads", "res", "spp_requested", "spp",
-              "repeats", "load_s", "render_s", "render_cold_s", "total_s", "relmse",
+              "repeats", "load_s", "render_s", "render_cold_s", "render_first_s", "total_s", "relmse",
               "relmse_corrected", "ref_noise", "ref_spp", "efficiency", "efficiency_render",
               "msamples_s", "mrays_s", "import_s"]
     with open(os.path.join(a.out, "benchmark.csv"), "w", newline="") as f:
