@@ -41,6 +41,10 @@ def main(argv=None):
                     help="multiply the candidate's images by F (e.g. 1.02) to show the test fails")
     ap.add_argument("--candidate-define", action="append", default=[], metavar="NAME=VALUE",
                     help="-D for the candidate's renders only (e.g. albedo=0.98 on the furnace: must fail)")
+    ap.add_argument("--sampler", metavar="NAME",
+                    help="the candidate's sampler: radia's independent, stratified, multijitter, "
+                         "orthogonal, ldsampler or sobol (default: the scene's own; the reference "
+                         "is always Mitsuba's independent sampler with a box filter)")
     ap.add_argument("--candidate-scene", metavar="XML",
                     help="render the candidate from this XML instead (one SCENE only): must fail "
                          "if it differs, e.g. a slightly wrong albedo")
@@ -77,6 +81,13 @@ def main(argv=None):
             log(f"compare.py: no such scene: {s}")
             return 2
 
+    from radiaval.common import MITSUBA_SAMPLERS, RADIA_SAMPLERS
+    allowed = RADIA_SAMPLERS if a.candidate == "radia" else MITSUBA_SAMPLERS
+    if a.sampler and a.sampler not in allowed:
+        log(f"compare.py: --sampler {a.sampler}: the {a.candidate} candidate's samplers are "
+            + ", ".join(allowed))
+        return 2
+
     if a.make_references:
         for s in scenes:
             references.make_reference(s, res, spp=a.ref_spp, passes=a.ref_passes,
@@ -108,7 +119,7 @@ def main(argv=None):
                           threads=a.threads, bias=a.inject_bias, parity=not a.no_parity,
                           parity_variant=a.parity_variant, ref_dir=a.ref_dir, out_dir=a.out,
                           alpha=a.alpha, tolerance=a.tolerance, candidate_scene=a.candidate_scene,
-                          candidate_defines=a.candidate_define)
+                          candidate_defines=a.candidate_define, candidate_sampler=a.sampler)
         except ValidationError as e:
             log(f"ERROR  {rel_to_repo(s)}: {e}")
             errors.append((s, str(e)))

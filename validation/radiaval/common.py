@@ -80,26 +80,138 @@ def set_mitsuba_threads(n):
     return dr.thread_count()
 
 
-class MitsubaRenderer:
-    """Renders passes of one scene in-process."""
+MITSUBA_SAMPLERS = ("independent", "stratified", "multijitter", "orthogonal", "ldsampler")
+RADIA_SAMPLERS = MITSUBA_SAMPLERS + ("sobol",)
+FILTERS = ("box", "gaussian")
 
-    def __init__(self, scene_path, res, spp, variant="scalar_rgb", threads=None, defines=()):
+
+def _set_property(parent, tag, name, value):
+    """Replace parent's property `name` (whatever its tag) by <tag name= value=>."""
+    for c in list(parent):
+        if c.get("name") == name and c.tag not in ("film", "sampler", "rfilter"):
+            parent.remove(c)
+    ET.SubElement(parent, tag, name=name, value=str(value))
+
+
+def scene_sensor(root, scene_path="scene"):
+    """The sensor Mitsuba renders by default (and radia renders): the first one."""
+    for e in root.iter("sensor"):
+        return e
+    raise ValidationError(f"{scene_path} has no <sensor> (Mitsuba 3.9 and radia both need one)")
+
+
+def mitsuba_scene_xml(scene_path, res=None, spp=None, sampler=None, rfilter=None):
+    """The scene's XML as written, with the first sensor's film size, sampler
+    (type and sample_count) and reconstruction filter overridden where given
+    (None keeps the scene's own). A sensor without a <film> or <sampler> gets
+    Mitsuba's defaults (hdrfilm 768x576 with a gaussian filter, independent
+    4 spp) plus the overrides. <default>s and $-references elsewhere are left to
+    Mitsuba. res is an int (square) or (width, height). Returns the XML text."""
+    try:
+        root = ET.parse(scene_path).getroot()
+    except ET.ParseError as e:
+        raise ValidationError(f"cannot parse {scene_path}: {e}")
+    defs = _defaults(root)
+    sensor = scene_sensor(root, scene_path)
+    if res is not None or rfilter is not None:
+        film = sensor.find("film")
+        if film is None:
+            film = ET.SubElement(sensor, "film", type="hdrfilm")
+        if res is not None:
+            w, h = (res, res) if isinstance(res, int) else res
+            _set_property(film, "integer", "width", int(w))
+            _set_property(film, "integer", "height", int(h))
+            for c in list(film):   # a crop window would make the image smaller than asked
+                if (c.get("name") or "").startswith("crop_"):
+                    film.remove(c)
+        if rfilter is not None:
+            for c in film.findall("rfilter"):
+                film.remove(c)
+            ET.SubElement(film, "rfilter", type=rfilter)
+    if sampler is not None or spp is not None:
+        smp = sensor.find("sampler")
+        if smp is None:
+            smp = ET.SubElement(sensor, "sampler", type="independent")
+        if sampler is not None and _subst(smp.get("type"), defs) != sampler:
+            # another plugin: keep only the properties every sampler takes
+            keep = [c for c in smp if c.get("name") in ("sample_count", "seed")]
+            smp.clear()
+            smp.set("type", sampler)
+            for c in keep:
+                smp.append(c)
+        if spp is not None:
+            _set_property(smp, "integer", "sample_count", int(spp))
+    return ET.tostring(root, encoding="unicode")
+
+
+def used_defines(xml_text, scene_path, defines):
+    """The -D NAME=VALUE defines that the scene still references as $NAME
+    (Mitsuba refuses unused parameters; e.g. -D spp=... once sample_count is
+    overridden). Returns (dict used, list dropped names)."""
+    texts = [xml_text] + [open(p).read() for p in scene_files(scene_path)[1:]
+                          if p.endswith(".xml") and os.path.exists(p)]
+    used, dropped = {}, []
+    for d in defines:
+        k, v = d.split("=", 1) if isinstance(d, str) else d
+        k = k.strip()
+        if any(re.search(r"\$" + re.escape(k) + r"(?![A-Za-z0-9_])", t) for t in texts):
+            used[k] = v
+        else:
+            dropped.append(k)
+    return used, dropped
+
+
+def load_mitsuba_scene(mi, scene_path, res=None, spp=None, sampler=None, rfilter=None,
+                       defines=(), xml_text=None):
+    """mi.load_string of mitsuba_scene_xml(...) with the scene's directory
+    prepended to Mitsuba's file resolver (as mi.load_file does), so relative
+    filenames resolve; the resolver is restored afterwards."""
+    if xml_text is None:
+        xml_text = mitsuba_scene_xml(scene_path, res, spp, sampler, rfilter)
+    params, _ = used_defines(xml_text, scene_path, defines)
+    fr = mi.file_resolver()
+    saved = [fr[i] for i in range(len(fr))]
+    fr.prepend(os.path.dirname(os.path.abspath(scene_path)))
+    try:
+        return mi.load_string(xml_text, **params)
+    finally:
+        fr.clear()
+        for p in saved:
+            fr.append(p)
+
+
+def mitsuba_scene_spp(scene):
+    """The spp the scene's (first) sensor's sampler renders, after its rounding."""
+    return int(scene.sensors()[0].sampler().sample_count())
+
+
+class MitsubaRenderer:
+    """Renders passes of one scene in-process. By default with an independent
+    sampler and a box filter (whatever the scene says), so that pixels are
+    independent as compare.py's test assumes for the reference; sampler=None or
+    rfilter=None keep the scene's own. self.spp is the spp actually rendered
+    (samplers round it)."""
+
+    def __init__(self, scene_path, res, spp, variant="scalar_rgb", threads=None, defines=(),
+                 sampler="independent", rfilter="box"):
         self.mi = mitsuba(variant)
         self.variant = variant
         self.threads = set_mitsuba_threads(threads)
-        self.res, self.spp = res, spp
+        self.res = res
         t0 = time.perf_counter()
-        params = dict(d.split("=", 1) for d in defines)
-        params.update(res=res, spp=spp)
-        self.scene = self.mi.load_file(scene_path, **params)
+        self.scene = load_mitsuba_scene(self.mi, scene_path, res=res, spp=spp, sampler=sampler,
+                                        rfilter=rfilter, defines=defines)
         self.load_time = time.perf_counter() - t0
+        self.spp = mitsuba_scene_spp(self.scene)
 
     def render(self, seed, spp=None):
         """One pass -> float32 (H, W, 3) array; also sets self.last_time."""
         import drjit as dr
-        spp = spp or self.spp
         t0 = time.perf_counter()
-        img = self.mi.render(self.scene, seed=seed, spp=spp)
+        if spp and spp != self.spp:
+            img = self.mi.render(self.scene, seed=seed, spp=spp)
+        else:
+            img = self.mi.render(self.scene, seed=seed)
         arr = np.array(img, dtype=np.float32, copy=True)
         dr.sync_thread()
         self.last_time = time.perf_counter() - t0
@@ -142,6 +254,7 @@ _RADIA_FINAL = re.compile(
     r"(?:,\s*([\d.eE+-]+)\s*Msamples/s)?(?:,\s*([\d.eE+-]+)\s*Mrays/s)?"
     r"(?:,\s*(\d+)\s*invalid samples)?")
 _RADIA_LOAD = re.compile(r"radia:\s*loaded\b.*?\bin\s*([\d.eE+-]+)\s*s\b")
+_RADIA_SAMPLER = re.compile(r"radia:\s*loaded\b.*\((\w+) sampler\)")
 
 
 def parse_radia_output(text):
@@ -149,6 +262,9 @@ def parse_radia_output(text):
     m = _RADIA_LOAD.search(text)
     if m:
         info["load_s"] = float(m.group(1))
+    m = _RADIA_SAMPLER.search(text)
+    if m:
+        info["sampler"] = m.group(1)
     m = None
     for m in _RADIA_FINAL.finditer(text):
         pass
@@ -173,13 +289,18 @@ def check_radia(binary):
 
 
 class RadiaRenderer:
-    """Renders passes of one scene by running the radia binary once per pass."""
+    """Renders passes of one scene by running the radia binary once per pass,
+    with the film size (--resolution), filter (--rfilter, default box: the
+    reference's) and sampler (--sampler; None: the scene's own) overridden on
+    radia's command line. The spp radia actually rendered (samplers round it)
+    is in self.infos[-1]["spp"]."""
 
     def __init__(self, scene_path, res, spp, binary=DEFAULT_RADIA, threads=None,
-                 extra_defines=(), bias=1.0):
+                 extra_defines=(), bias=1.0, sampler=None, rfilter="box"):
         self.binary = check_radia(binary)
         self.scene_path, self.res, self.spp = scene_path, res, spp
         self.threads = threads
+        self.sampler, self.rfilter = sampler, rfilter
         self.extra_defines = list(extra_defines)
         self.bias = bias  # multiply output (only for demonstrating the test's teeth)
         self.tmp = tempfile.mkdtemp(prefix="radia-val-")
@@ -188,10 +309,13 @@ class RadiaRenderer:
 
     def command(self, out, seed, spp):
         cmd = [self.binary, "render", self.scene_path, "-o", out,
-               "--spp", str(spp), "--seed", str(seed)]
+               "--spp", str(spp), "--seed", str(seed), "--resolution", f"{self.res}x{self.res}"]
         if self.threads:
             cmd += ["--threads", str(self.threads)]
-        cmd += ["-D", f"res={self.res}", "-D", f"spp={spp}"]
+        if self.rfilter:
+            cmd += ["--rfilter", self.rfilter]
+        if self.sampler:
+            cmd += ["--sampler", self.sampler]
         for d in self.extra_defines:
             cmd += ["-D", d]
         return cmd

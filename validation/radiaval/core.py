@@ -42,13 +42,17 @@ def parity_figures(cand, mts, ref_mean):
 def run_scene(scene_path, res, spp, passes, candidate="radia", radia=DEFAULT_RADIA,
               threads=2, bias=1.0, parity=True, parity_variant="scalar_rgb",
               ref_dir=None, out_dir=OUT_DIR, alpha=0.01, tolerance=0.0025,
-              candidate_scene=None, cand_label=None, candidate_defines=()):
+              candidate_scene=None, cand_label=None, candidate_defines=(),
+              candidate_sampler=None):
     """Compare one scene; returns a dict (also written to out_dir/NAME/result.json).
 
     candidate: "radia" (the binary) or "mitsuba" (independent Mitsuba passes: the
     self-check that must pass). bias multiplies the candidate's images (to show
     the test fails). candidate_scene renders the candidate from another XML
     (e.g. with a slightly wrong albedo) against the reference of scene_path.
+    candidate_sampler names the candidate's sampler (None: the scene's own).
+    Every render uses a box filter at res x res, whatever the scene says: the
+    reference's (independent sampler, box filter: independent pixels).
     """
     name = scene_name(scene_path)
     t_start = time.perf_counter()
@@ -62,6 +66,8 @@ def run_scene(scene_path, res, spp, passes, candidate="radia", radia=DEFAULT_RAD
         label += " with " + " ".join(candidate_defines)
     if candidate_scene:
         label += f" rendering {os.path.basename(candidate_scene)}"
+    if candidate_sampler:
+        label += f", {candidate_sampler} sampler"
 
     def prog(what):
         def f(i, n):
@@ -73,9 +79,12 @@ def run_scene(scene_path, res, spp, passes, candidate="radia", radia=DEFAULT_RAD
     info = {}
     if candidate == "radia":
         r = RadiaRenderer(cscene, res, spp, binary=radia, threads=threads, bias=bias,
-                          extra_defines=candidate_defines)
+                          extra_defines=candidate_defines, sampler=candidate_sampler)
         cand = r.passes(passes, seed0=0, progress=prog("radia"))
         info = dict(invalid_samples=r.invalid,
+                    candidate_spp_rendered=r.infos[-1].get("spp") if r.infos else None,
+                    candidate_sampler=(r.infos[-1].get("sampler") if r.infos else None)
+                    or candidate_sampler,
                     radia_render_s=sum(i.get("render_s", 0.0) for i in r.infos),
                     radia_load_s=sum(i.get("load_s", 0.0) for i in r.infos),
                     radia_wall_s=sum(i["wall_s"] for i in r.infos),
@@ -84,7 +93,9 @@ def run_scene(scene_path, res, spp, passes, candidate="radia", radia=DEFAULT_RAD
                     if r.infos else [])
     elif candidate == "mitsuba":
         r = MitsubaRenderer(cscene, res, spp, variant=parity_variant, threads=threads,
-                            defines=candidate_defines)
+                            defines=candidate_defines, sampler=candidate_sampler)
+        info = dict(candidate_spp_rendered=r.spp, candidate_sampler=candidate_sampler
+                    or "scene's own")
         # Seeds far from the reference's (REF_SEED_BASE + k) and from the parity
         # passes (0..K-1): independent of both.
         cand = r.passes(passes, seed0=2000, progress=prog("Mitsuba candidate"))
@@ -161,6 +172,9 @@ def format_result(r):
                      f"({'<=' if p['relmse_ok'] else '>'} 1.1)")
     else:
         lines.append(s + f", relMSE vs reference {p['relmse_candidate']:.4e}")
+    if r.get("candidate_spp_rendered") and r["candidate_spp_rendered"] != r["spp"]:
+        lines.append(f"  NOTE: the candidate's {r.get('candidate_sampler')} sampler rendered "
+                     f"{r['candidate_spp_rendered']} spp per pass, not {r['spp']}")
     if r.get("invalid_samples"):
         lines.append(f"  WARNING: radia reported {r['invalid_samples']} invalid samples")
     if r.get("nonfinite_values"):

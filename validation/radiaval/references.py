@@ -46,20 +46,30 @@ def _file_name(scene_path, res):
     return scene_key(scene_path).replace("/", "__").replace("\\", "__") + f"@{res}.npz"
 
 
-def render_params(res, spp, passes, variant, seed_base=REF_SEED_BASE):
-    return {"res": int(res), "spp_per_pass": int(spp), "passes": int(passes),
-            "variant": variant, "seed_base": int(seed_base)}
+def render_params(res, spp, passes, variant, seed_base=REF_SEED_BASE, defines=()):
+    """What the reference's hash covers besides the scene's files. Every
+    reference is rendered with Mitsuba's independent sampler and a box filter
+    at res x res, whatever the scene declares: a constant, so not hashed (the
+    hash of references made before those overrides existed stays valid).
+    -D defines are hashed only when there are some, for the same reason."""
+    p = {"res": int(res), "spp_per_pass": int(spp), "passes": int(passes),
+         "variant": variant, "seed_base": int(seed_base)}
+    if defines:
+        p["defines"] = sorted(defines)
+    return p
 
 
 def make_reference(scene_path, res, spp=DEFAULT_REF_SPP, passes=DEFAULT_REF_PASSES,
-                   variant=DEFAULT_REF_VARIANT, ref_dir=REFERENCE_DIR, threads=None):
-    """Render and store a reference; returns its manifest entry."""
-    params = render_params(res, spp, passes, variant)
+                   variant=DEFAULT_REF_VARIANT, ref_dir=REFERENCE_DIR, threads=None, defines=()):
+    """Render and store a reference (independent sampler, box filter, res x res,
+    whatever the scene declares); returns its manifest entry."""
+    params = render_params(res, spp, passes, variant, defines=defines)
     h, files = scene_hash(scene_path, params)
     log(f"reference: {rel_to_repo(scene_path)} {res}x{res}, {passes} passes x {spp} spp "
         f"({passes * spp} spp), {variant}")
     t0 = time.perf_counter()
-    r = MitsubaRenderer(scene_path, res, spp, variant=variant, threads=threads)
+    r = MitsubaRenderer(scene_path, res, spp, variant=variant, threads=threads, defines=defines,
+                        sampler="independent", rfilter="box")
     imgs = r.passes(passes, seed0=REF_SEED_BASE,
                     progress=lambda i, n: (i % max(1, n // 8) == 0 or i == n) and
                     log(f"  pass {i}/{n}  {time.perf_counter() - t0:.1f} s"))
@@ -94,7 +104,8 @@ class Reference:
 
 def check_entry(scene_path, entry):
     """Raise ValidationError if the cached reference no longer matches the scene."""
-    params = {k: entry[k] for k in ("res", "spp_per_pass", "passes", "variant", "seed_base")}
+    params = {k: entry[k] for k in ("res", "spp_per_pass", "passes", "variant", "seed_base",
+                                    "defines") if k in entry}
     h, files = scene_hash(scene_path, params)
     if h != entry["hash"]:
         changed = sorted(set(f for f in set(files) | set(entry.get("files", {}))

@@ -11,6 +11,8 @@ if VALIDATION not in sys.path:
 
 FIXTURES = os.path.join(VALIDATION, "tests", "fixtures")
 SIMPLE = os.path.join(FIXTURES, "simple.xml")
+NODEFAULTS = os.path.join(FIXTURES, "nodefaults.xml")     # no $res/$spp, gaussian filter, stratified
+SENSOR_ONLY = os.path.join(FIXTURES, "sensor-only.xml")   # a sensor without film and sampler
 RES = 32
 
 _ref_dir = None

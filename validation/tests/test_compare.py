@@ -16,14 +16,16 @@ import unittest
 
 import numpy as np
 
-from .helpers import RES, SIMPLE, VALIDATION, shared_ref_dir, tmpdir
+from .helpers import NODEFAULTS, RES, SENSOR_ONLY, SIMPLE, VALIDATION, shared_ref_dir, tmpdir
 from radiaval import stats
-from radiaval.common import DEFAULT_RADIA, ValidationError, derive_scene, scene_files
+from radiaval.common import (DEFAULT_RADIA, ValidationError, derive_scene, load_mitsuba_scene,
+                             mitsuba, mitsuba_scene_spp, parse_radia_output, scene_files)
 from radiaval.core import run_scene
 from radiaval.references import load_reference, make_reference
 
 PY = sys.executable
 COMPARE = os.path.join(VALIDATION, "compare.py")
+BENCHMARK = os.path.join(VALIDATION, "benchmark.py")
 SPP, PASSES = 16, 32
 
 
@@ -181,13 +183,109 @@ class References(unittest.TestCase):
             load_reference(SIMPLE, 17, ref_dir=tmpdir(self))
 
 
+def fake_radia(tmp):
+    exe = os.path.join(tmp, "radia")
+    with open(exe, "w") as f:
+        f.write(f"#!/bin/sh\nexec {PY} {os.path.join(VALIDATION, 'tests', 'fake_radia.py')} \"$@\"\n")
+    os.chmod(exe, os.stat(exe).st_mode | stat.S_IXUSR)
+    return exe
+
+
+class SceneOverrides(unittest.TestCase):
+    """Scenes as users write them: film size, sampler and filter are overridden by
+    editing the loaded description, not through $res/$spp defaults."""
+
+    def sensor(self, path, **kw):
+        mi = mitsuba("scalar_rgb")
+        sc = load_mitsuba_scene(mi, path, **kw)
+        s = sc.sensors()[0]
+        return (tuple(s.film().size()), mitsuba_scene_spp(sc), str(s.film().rfilter()),
+                str(s.sampler()))
+
+    def test_no_defaults_scene(self):
+        size, spp, rf, _ = self.sensor(NODEFAULTS)
+        self.assertEqual((size, spp), ((48, 36), 9))
+        self.assertIn("Gaussian", rf)
+        size, spp, rf, smp = self.sensor(NODEFAULTS, res=16, spp=8, sampler="independent",
+                                         rfilter="box")   # relative floor.obj resolves
+        self.assertEqual((size, spp), ((16, 16), 8))
+        self.assertIn("Box", rf)
+        self.assertIn("Independent", smp)
+        self.assertEqual(self.sensor(NODEFAULTS, res=(20, 10), spp=20, sampler="ldsampler")[:2],
+                         ((20, 10), 64))   # Mitsuba rounds: a power-of-two square
+
+    def test_sensor_without_film_or_sampler(self):
+        self.assertEqual(self.sensor(SENSOR_ONLY)[:2], ((768, 576), 4))
+        size, spp, rf, _ = self.sensor(SENSOR_ONLY, res=8, spp=3, rfilter="box")
+        self.assertEqual((size, spp), ((8, 8), 3))
+        self.assertIn("Box", rf)
+
+    def test_defines_still_work_and_unused_ones_are_dropped(self):
+        mi = mitsuba("scalar_rgb")
+        furnace = os.path.join(os.path.dirname(VALIDATION), "scenes", "furnace.xml")
+        if not os.path.exists(furnace):
+            self.skipTest("no scenes/furnace.xml")
+        # spp is no longer referenced once sample_count is overridden: dropped, not an error
+        sc = load_mitsuba_scene(mi, furnace, res=8, spp=4, defines=["albedo=0.5", "spp=99"])
+        self.assertEqual(mitsuba_scene_spp(sc), 4)
+        self.assertLess(float(np.array(mi.render(sc)).mean()), 0.99)
+
+    def test_parse_radia_output(self):
+        info = parse_radia_output(
+            "radia: loaded s.xml in 0.010 s: 2 primitives, 1 emitters, 32x32 at 25 spp "
+            "(orthogonal sampler)\nradia: 32x32, 25 spp, 0.5 s render, 1.00 Msamples/s, "
+            "2.00 Mrays/s, 0 invalid samples dropped -> o.exr")
+        self.assertEqual((info["spp"], info["sampler"], info["load_s"]), (25, "orthogonal", 0.01))
+
+    def test_reference_and_compare_without_defaults(self):
+        """--make-references and the test itself on a scene with no $res/$spp,
+        a gaussian filter and a stratified sampler; the candidate with the
+        scene's own sampler and with --sampler sobol."""
+        tmp = tmpdir(self)
+        d = os.path.join(tmp, "refs")
+        p = subprocess.run([PY, COMPARE, "--make-references", NODEFAULTS, "--res", "16",
+                            "--ref-spp", "64", "--ref-passes", "16", "--ref-dir", d],
+                           capture_output=True, text=True)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+        exe = fake_radia(tmp)
+        for extra in ([], ["--sampler", "sobol"]):
+            p = subprocess.run([PY, COMPARE, NODEFAULTS, "--res", "16", "--spp", "4",
+                                "--passes", "8", "--ref-dir", d, "--radia", exe, "--no-report",
+                                "--out", os.path.join(tmp, "out")] + extra,
+                               capture_output=True, text=True)
+            self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+            self.assertIn("PASS", p.stdout)
+        p = subprocess.run([PY, COMPARE, NODEFAULTS, "--res", "16", "--ref-dir", d, "--radia", exe,
+                            "--sampler", "nope", "--no-report"], capture_output=True, text=True)
+        self.assertEqual(p.returncode, 2, p.stdout + p.stderr)
+
+    def test_benchmark_smoke(self):
+        """benchmark.py end to end with the fake radia, on the no-defaults scene."""
+        tmp = tmpdir(self)
+        out = os.path.join(tmp, "bench")
+        p = subprocess.run([PY, BENCHMARK, NODEFAULTS, "--res", "8", "--spp", "5", "--repeats", "1",
+                            "--ref-spp", "64", "--variants", "scalar_rgb", "--radia", fake_radia(tmp),
+                            "--radia-samplers", "independent,orthogonal", "--mitsuba-samplers",
+                            "independent,ldsampler", "--radia-alt", f"before={fake_radia(tmp)}",
+                            "--out", out], capture_output=True, text=True)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+        for f in ("benchmark.md", "benchmark.csv", "benchmark.html", "nodefaults.png"):
+            self.assertTrue(os.path.exists(os.path.join(out, f)), f)
+        with open(os.path.join(out, "benchmark.md")) as f:
+            md = f.read()
+        self.assertIn("Best vs best", md)
+        self.assertIn("Same estimator", md)
+        self.assertIn("radia[before]", md)
+        with open(os.path.join(out, "benchmark.csv")) as f:
+            rows = f.read()
+        self.assertIn(",orthogonal,", rows)
+        self.assertIn(",orthogonal,2,8,5,9,", rows)   # orthogonal renders 9 spp when asked for 5
+        self.assertIn(",ldsampler,2,8,5,16,", rows)   # ldsampler 16
+
+
 class CommandLine(unittest.TestCase):
     def fake_radia(self, tmp):
-        exe = os.path.join(tmp, "radia")
-        with open(exe, "w") as f:
-            f.write(f"#!/bin/sh\nexec {PY} {os.path.join(VALIDATION, 'tests', 'fake_radia.py')} \"$@\"\n")
-        os.chmod(exe, os.stat(exe).st_mode | stat.S_IXUSR)
-        return exe
+        return fake_radia(tmp)
 
     def run_cli(self, bias, code):
         """compare.py drives a binary with radia's command line (a Mitsuba
