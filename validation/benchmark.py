@@ -411,11 +411,12 @@ def efficiency_main(a):
     variants = [v for v in a.variants.split(",") if v]
     m_samplers = [s for s in a.mitsuba_samplers.split(",") if s]
     r_samplers = [s for s in a.radia_samplers.split(",") if s]
+    alt_samplers = [s for s in a.alt_samplers.split(",") if s]
     for s in m_samplers:
         if s not in MITSUBA_SAMPLERS:
             log(f"benchmark.py: unknown Mitsuba sampler {s} (one of {', '.join(MITSUBA_SAMPLERS)})")
             return 2
-    for s in r_samplers:
+    for s in r_samplers + alt_samplers:
         if s not in RADIA_SAMPLERS:
             log(f"benchmark.py: unknown radia sampler {s} (one of {', '.join(RADIA_SAMPLERS)})")
             return 2
@@ -453,7 +454,7 @@ def efficiency_main(a):
             log(f"  reference: {ref.total_spp} spp ({ref.entry['variant']})")
             rows = []
             for label, binary in binaries:
-                for s in r_samplers:
+                for s in (r_samplers if label == "radia" else alt_samplers):
                     r = measure_radia(scene, a.res, a.spp, s, binary, label, a.threads, ref,
                                       a.repeats, a.define)
                     rows.append(r)
@@ -580,6 +581,8 @@ def main(argv=None):
     ap.add_argument("--radia-samplers", default=",".join(RADIA_SAMPLERS),
                     help="default: all of " + ",".join(RADIA_SAMPLERS))
     ap.add_argument("--radia", default=DEFAULT_RADIA, help="radia binary (default target/release/radia)")
+    ap.add_argument("--alt-samplers", default="independent,sobol",
+                    help="radia samplers measured with each --radia-alt binary (default independent,sobol)")
     ap.add_argument("--radia-alt", action="append", default=[], metavar="NAME=PATH",
                     help="another radia binary, reported as extra rows radia[NAME] (repeatable), "
                          "e.g. the build before a change")
