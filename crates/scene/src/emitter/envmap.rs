@@ -68,11 +68,12 @@ pub struct Envmap {
     to_local: Mat3,
     /// cos θ of texel rows 0..H: the borders of the sampling cells (descending from 1 to −1).
     row_cos: Vec<f32>,
-    /// Per texel row, the distance of cos θ to the nearer pole: 1 − cos θ in the upper
-    /// hemisphere, 1 + cos θ in the lower, to full f32 precision. A cell interpolates in the
-    /// one of its upper row, so t keeps its precision in the rows next to the poles, where
-    /// cos θ itself varies by a few ulps only (`cell_t`).
-    row_pole_dist: Vec<f32>,
+    /// Per row of cells j, the distance of cos θ to a pole at its two borders (rows j and
+    /// j + 1), to full f32 precision: 1 − cos θ if row j is in the upper hemisphere, else
+    /// 1 + cos θ (a row of cells straddling the horizon measures both borders from the
+    /// zenith). Interpolated in it, t keeps its precision in the rows next to the poles, where
+    /// cos θ itself varies by a few ulps only (`cell_cos_sin`, `cell_t`).
+    cell_pole_dist: Vec<[f32; 2]>,
     /// Row of cells ∝ its weight; `None` when the map is black (nothing to sample).
     rows: Option<DiscreteDistribution>,
     /// Per row of cells: the column ∝ mean corner weight.
@@ -125,16 +126,15 @@ impl Envmap {
         let row_cos: Vec<f32> = (0..h)
             .map(|j| (j as f64 * std::f64::consts::PI / (h - 1) as f64).cos() as f32)
             .collect();
-        let row_pole_dist: Vec<f32> = (0..h)
+        let cell_pole_dist: Vec<[f32; 2]> = (0..h - 1)
             .map(|j| {
-                let half = 0.5 * j as f64 * std::f64::consts::PI / (h - 1) as f64;
-                // 1 − cos θ = 2 sin² θ/2, 1 + cos θ = 2 cos² θ/2.
-                let d = if Self::upper(j, h) {
-                    half.sin()
-                } else {
-                    half.cos()
-                };
-                (2.0 * d * d) as f32
+                let upper = Self::upper(j, h);
+                [j, j + 1].map(|r| {
+                    let half = 0.5 * r as f64 * std::f64::consts::PI / (h - 1) as f64;
+                    // 1 − cos θ = 2 sin² θ/2, 1 + cos θ = 2 cos² θ/2.
+                    let d = if upper { half.sin() } else { half.cos() };
+                    (2.0 * d * d) as f32
+                })
             })
             .collect();
         let dphi = std::f64::consts::TAU / w as f64;
@@ -174,7 +174,7 @@ impl Envmap {
             to_world,
             to_local: to_world.inverse(),
             row_cos,
-            row_pole_dist,
+            cell_pole_dist,
             rows,
             columns,
             weight,
@@ -214,7 +214,7 @@ impl Envmap {
         top * (1.0 - fy) + bottom * fy
     }
 
-    /// Whether texel row j lies in the upper hemisphere (cos θ ≥ 0; the cells from row j down
+    /// Whether texel row j lies above the horizon (θⱼ < π/2; the cells from row j down
     /// to row j + 1 interpolate 1 − cos θ then, otherwise 1 + cos θ).
     #[inline]
     fn upper(j: usize, h: usize) -> bool {
@@ -222,10 +222,10 @@ impl Envmap {
     }
 
     /// cos θ and sin θ at fraction t of row of cells j (t = 0 at row j, 1 at row j + 1),
-    /// interpolated in `row_pole_dist` so that the direction carries t to full precision.
+    /// interpolated in `cell_pole_dist` so that the direction carries t to full precision.
     #[inline]
     fn cell_cos_sin(&self, j: usize, t: f32) -> (f32, f32) {
-        let (p0, p1) = (self.row_pole_dist[j], self.row_pole_dist[j + 1]);
+        let [p0, p1] = self.cell_pole_dist[j];
         let p = p0 + (p1 - p0) * t;
         // sin² θ = (1 − cos θ)(1 + cos θ) = p (2 − p).
         let sin_theta = safe_sqrt(p * (2.0 - p));
@@ -252,7 +252,7 @@ impl Envmap {
         } else {
             1.0 + d.y
         };
-        let (p0, p1) = (self.row_pole_dist[j], self.row_pole_dist[j + 1]);
+        let [p0, p1] = self.cell_pole_dist[j];
         ((p - p0) / (p1 - p0)).clamp(0.0, 1.0)
     }
 
