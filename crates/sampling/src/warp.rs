@@ -112,6 +112,124 @@ pub fn uniform_triangle_to_square(b: Vec2) -> Vec2 {
     Vec2::new(1.0 - t * t, if t > 0.0 { b.y / t } else { 0.0 })
 }
 
+/// Largest f32 below one: where the linear warps clamp their results.
+const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// Samples x in [0, 1) with density ∝ (1 − x) a + x b, the linear interpolant of the
+/// finite non-negative end values `a` (at 0) and `b` (at 1); pdf [`linear_pdf`].
+///
+/// It inverts the CDF x ((2 − x) a + x b) / (a + b) in the form of pbrt-v4's `SampleLinear`
+/// (`util/math.h`), x = u (a + b) / (a + √((1 − u) a² + u b²)), which has no cancellation
+/// (the textbook (a − √·) / (a − b) cancels as a → b, which is why Mitsuba's
+/// `interval_to_linear` in `include/mitsuba/core/warp.h` switches to u there) and covers the
+/// degenerate cases without a branch: a = b gives u, a = 0 gives √u, b = 0 gives 1 − √(1 − u).
+/// The ends are scaled by their maximum first so their squares neither overflow nor
+/// underflow. Both ends zero (no density): uniform, x = u, as [`linear_pdf`] assumes.
+#[inline]
+pub fn interval_to_linear(u: f32, a: f32, b: f32) -> f32 {
+    debug_assert!(
+        a >= 0.0 && b >= 0.0 && a.is_finite() && b.is_finite(),
+        "linear warp with ends {a}, {b}"
+    );
+    let m = a.max(b);
+    if m.is_nan() || m <= 0.0 {
+        return u;
+    }
+    let (a, b) = (a / m, b / m);
+    // u = 0 with a = 0 would be 0 / 0.
+    if u <= 0.0 && a == 0.0 {
+        return 0.0;
+    }
+    let x = u * (a + b) / (a + ((1.0 - u) * a * a + u * b * b).sqrt());
+    x.clamp(0.0, ONE_MINUS_EPSILON)
+}
+
+/// Density of [`interval_to_linear`] at x: 2 ((1 − x) a + x b) / (a + b) on [0, 1], 1 when
+/// both ends are zero, 0 outside.
+#[inline]
+pub fn linear_pdf(x: f32, a: f32, b: f32) -> f32 {
+    if !(0.0..=1.0).contains(&x) {
+        return 0.0;
+    }
+    // Scaled as in the warp (no overflow of a + b, the same zero test).
+    let m = a.max(b);
+    if m.is_nan() || m <= 0.0 {
+        return 1.0;
+    }
+    let (a, b) = (a / m, b / m);
+    2.0 * ((1.0 - x) * a + x * b) / (a + b)
+}
+
+/// Inverse of [`interval_to_linear`]: the CDF x ((2 − x) a + x b) / (a + b) (x when both ends
+/// are zero).
+#[inline]
+pub fn linear_to_interval(x: f32, a: f32, b: f32) -> f32 {
+    let m = a.max(b);
+    if m.is_nan() || m <= 0.0 {
+        return x;
+    }
+    let (a, b) = (a / m, b / m);
+    (x * ((2.0 - x) * a + x * b) / (a + b)).clamp(0.0, 1.0)
+}
+
+/// Bilinear interpolation of the corner values `w` = [w₀₀, w₁₀, w₀₁, w₁₁] (wₓᵧ at (x, y))
+/// at `p` in the unit square.
+#[inline]
+pub fn bilerp(p: Vec2, w: [f32; 4]) -> f32 {
+    let (x, y) = (p.x, p.y);
+    (1.0 - y) * ((1.0 - x) * w[0] + x * w[1]) + y * ((1.0 - x) * w[2] + x * w[3])
+}
+
+/// Samples a point of the unit square with density ∝ the bilinear interpolant of the
+/// finite non-negative corner values `w` = [w₀₀, w₁₀, w₀₁, w₁₁] (wₓᵧ at (x, y)); pdf
+/// [`bilinear_pdf`].
+///
+/// The marginal density of y is linear with ends w₀₀ + w₁₀ and w₀₁ + w₁₁; given y, the
+/// conditional density of x is linear with ends lerp(y, w₀₀, w₀₁) and lerp(y, w₁₀, w₁₁).
+/// `u.y` samples the first, `u.x` the second, both with [`interval_to_linear`] (the order of
+/// pbrt-v4's `SampleBilinear` and Mitsuba's `square_to_bilinear`, `core/warp.h`). All corners
+/// zero: uniform. Where the conditional has no mass (y on an edge whose two corners are zero,
+/// reached only for u.y = 0 or at the clamp), x is uniform on that edge, a set of measure zero
+/// where [`bilinear_pdf`] is 0.
+#[inline]
+pub fn square_to_bilinear(u: Vec2, w: [f32; 4]) -> Vec2 {
+    // Scaled by the largest corner so the sums below cannot overflow.
+    let m = w[0].max(w[1]).max(w[2]).max(w[3]);
+    let w = if m > 0.0 { w.map(|c| c / m) } else { w };
+    let y = interval_to_linear(u.y, w[0] + w[1], w[2] + w[3]);
+    let x = interval_to_linear(
+        u.x,
+        (1.0 - y) * w[0] + y * w[2],
+        (1.0 - y) * w[1] + y * w[3],
+    );
+    Vec2::new(x, y)
+}
+
+/// Density of [`square_to_bilinear`]: the interpolant divided by its mean (the mean of the
+/// corners), on the unit square; 1 when all corners are zero, 0 outside.
+#[inline]
+pub fn bilinear_pdf(p: Vec2, w: [f32; 4]) -> f32 {
+    if !((0.0..=1.0).contains(&p.x) && (0.0..=1.0).contains(&p.y)) {
+        return 0.0;
+    }
+    let m = w[0].max(w[1]).max(w[2]).max(w[3]);
+    if m.is_nan() || m <= 0.0 {
+        return 1.0;
+    }
+    let w = w.map(|c| c / m);
+    bilerp(p, w) / (0.25 * (w[0] + w[1] + w[2] + w[3]))
+}
+
+/// Inverse of [`square_to_bilinear`].
+#[inline]
+pub fn bilinear_to_square(p: Vec2, w: [f32; 4]) -> Vec2 {
+    let (x, y) = (p.x, p.y);
+    Vec2::new(
+        linear_to_interval(x, (1.0 - y) * w[0] + y * w[2], (1.0 - y) * w[1] + y * w[3]),
+        linear_to_interval(y, w[0] + w[1], w[2] + w[3]),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -326,6 +444,119 @@ mod tests {
         }
     }
 
+    /// Corner sets for the bilinear warp: generic, equal, one or two corners zero, one corner
+    /// alone, and a steep patch (10⁸ between corners).
+    const BILINEAR_CORNERS: [[f32; 4]; 6] = [
+        [1.0, 2.0, 3.0, 4.0],
+        [0.7, 0.7, 0.7, 0.7],
+        [0.0, 1.0, 2.0, 0.5],
+        [0.0, 0.0, 1.0, 3.0],
+        [5.0, 0.0, 0.0, 0.0],
+        [1e-4, 1.0, 1.0, 1e4],
+    ];
+
+    #[test]
+    fn chi2_bilinear() {
+        for w in BILINEAR_CORNERS {
+            let r = chi2_test_2d(
+                &unit_square_cfg(),
+                |u, _| Some(square_to_bilinear(u, w)),
+                |p| bilinear_pdf(p, w) as f64,
+            );
+            println!("corners {w:?}");
+            assert_normalized_pass(&r);
+        }
+    }
+
+    #[test]
+    fn linear_warp_degenerate_ends() {
+        let us = [
+            0.0,
+            1e-30,
+            1e-7,
+            0.25,
+            0.5,
+            0.75,
+            0.999_999,
+            1.0 - f32::EPSILON / 2.0,
+        ];
+        for u in us {
+            // Equal ends: uniform; a zero end: √u and 1 − √(1 − u); no ends: uniform.
+            for (a, b, expect) in [
+                (1.0, 1.0, u),
+                (3e-38, 3e-38, u),
+                (1e30, 1e30, u),
+                (0.0, 2.0, u.sqrt()),
+                (2.0, 0.0, 1.0 - (1.0 - u).sqrt()),
+                (0.0, 0.0, u),
+            ] {
+                let x = interval_to_linear(u, a, b);
+                let tol = 2e-7 + 1e-6 * expect;
+                assert!(
+                    (x - expect).abs() <= tol.max(4e-4 * (u < 1e-6) as u8 as f32),
+                    "u {u}, ends ({a}, {b}): {x}, expected {expect}"
+                );
+                assert!((0.0..1.0).contains(&x), "u {u}, ends ({a}, {b}): {x}");
+            }
+            // Nothing is NaN, whatever the ends (zero, denormal, huge, very unequal).
+            for a in [0.0, 1e-45, 1e-30, 1e-3, 1.0, 1e20, 3e38] {
+                for b in [0.0, 1e-45, 1e-30, 1e-3, 1.0, 1e20, 3e38] {
+                    let x = interval_to_linear(u, a, b);
+                    assert!((0.0..1.0).contains(&x), "u {u}, ends ({a}, {b}): {x}");
+                    let pdf = linear_pdf(x, a, b);
+                    assert!(pdf.is_finite() && pdf >= 0.0, "({a}, {b}) at {x}: {pdf}");
+                }
+            }
+        }
+        assert_eq!(linear_pdf(0.3, 0.0, 0.0), 1.0);
+        assert_eq!(linear_pdf(1.5, 1.0, 2.0), 0.0);
+        assert!((linear_pdf(0.25, 1.0, 3.0) - 2.0 * 1.5 / 4.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn linear_and_bilinear_warps_invert() {
+        let n = 50;
+        for (a, b) in [
+            (1.0, 3.0),
+            (3.0, 1.0),
+            (0.0, 1.0),
+            (1.0, 0.0),
+            (1.0, 1.0),
+            (1e-6, 1.0),
+        ] {
+            for k in 0..=n {
+                let u = k as f32 / n as f32 * (1.0 - f32::EPSILON);
+                let x = interval_to_linear(u, a, b);
+                let back = linear_to_interval(x, a, b);
+                assert!((back - u).abs() < 2e-6, "({a}, {b}): {u} -> {x} -> {back}");
+            }
+        }
+        for w in BILINEAR_CORNERS {
+            for i in 0..n {
+                for j in 0..n {
+                    let u = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+                    let p = square_to_bilinear(u, w);
+                    assert!(p.x >= 0.0 && p.x < 1.0 && p.y >= 0.0 && p.y < 1.0);
+                    assert!(bilinear_pdf(p, w) > 0.0, "{w:?}: {u} -> {p}");
+                    let back = bilinear_to_square(p, w);
+                    assert!(
+                        (back - u).abs().max_element() < 2e-5,
+                        "{w:?}: {u} -> {p} -> {back}"
+                    );
+                }
+            }
+        }
+        // All corners zero: the identity, density 1.
+        let zero = [0.0; 4];
+        let u = Vec2::new(0.3, 0.8);
+        assert_eq!(square_to_bilinear(u, zero), u);
+        assert_eq!(bilinear_pdf(u, zero), 1.0);
+        // Density = interpolant / corner mean.
+        let w = [1.0, 2.0, 3.0, 4.0];
+        assert!((bilinear_pdf(Vec2::new(1.0, 1.0), w) - 4.0 / 2.5).abs() < 1e-6);
+        assert!((bilinear_pdf(Vec2::new(0.5, 0.5), w) - 1.0).abs() < 1e-6);
+    }
+
     // ----- the harness has teeth: wrong pdfs are rejected -----
 
     #[track_caller]
@@ -428,6 +659,17 @@ mod tests {
         assert_rejected(&chi2_test(&sphere_cfg(), sample, |d| {
             0.7 * cosine_hemisphere_pdf(d) as f64
         }));
+    }
+
+    #[test]
+    fn chi2_rejects_transposed_bilinear() {
+        // Samples of one patch against the density of its transpose (x and y swapped).
+        let r = chi2_test_2d(
+            &unit_square_cfg(),
+            |u, _| Some(square_to_bilinear(u, [1.0, 2.0, 3.0, 4.0])),
+            |p| bilinear_pdf(p, [1.0, 3.0, 2.0, 4.0]) as f64,
+        );
+        assert_rejected(&r);
     }
 
     #[test]

@@ -17,22 +17,44 @@
 //! Radiance is the bilinear interpolation at x = u·W − ½ (mod W), y = v·(H − 1), times `scale`.
 //!
 //! # Sampling
+//! Every texel has a sampling weight w, its luminance (at least 1% of its largest RGB
+//! component, which changes nothing for non-negative colours, whose luminance is at least
+//! 7.2% of it, but keeps a texel with negative components and a positive one sampled). With
+//! `mis_compensation` the average luminance is subtracted from the weights first, negative
+//! results clamped to zero (Karlík et al. 2019, as envmap.cpp's `rebuild_distribution`).
+//!
 //! Between four neighbouring texel centres the radiance is bilinear, so the sphere splits into
 //! W × (H − 1) cells, cell (i, j) spanning φ ∈ 2π[(i + ½)/W, (i + 3/2)/W] and
-//! θ ∈ π[j, j + 1]/(H − 1). A cell is chosen with probability ∝ L̄ · Ω, L̄ the mean luminance
-//! of its corners (the exact mean of the bilinear interpolant over the cell, so a cell is
-//! never skipped where the radiance is not zero) and Ω = Δφ (cos θⱼ − cos θⱼ₊₁) its solid
-//! angle (the sin θ weighting, integrated exactly); then a direction uniformly in solid angle
-//! inside it (uniform in φ and cos θ). The density is piecewise constant per steradian,
-//! pdf = L̄ / Σ L̄ Ω, with no 1/sin θ blow-up at the poles. (Mitsuba samples a piecewise-
-//! bilinear warp over the same grid; both are unbiased, the images agree in expectation.)
-//! With `mis_compensation` the average luminance is subtracted from the sampling weights first
-//! (Karlík et al. 2019, as envmap.cpp).
+//! θ ∈ π[j, j + 1]/(H − 1). In cell coordinates s = φ fraction and t = (cos θⱼ − cos θ) /
+//! (cos θⱼ − cos θⱼ₊₁) (uniform in cos θ, so ds dt = dω / Ω with Ω = Δφ (cos θⱼ − cos θⱼ₊₁)
+//! the cell's solid angle) the sampling density per steradian is the bilinear interpolant
+//! w(s, t) of the cell's four corner weights:
+//!
+//! pdf(ω) = w(s, t) / Σ_cells w̄ Ω,
+//!
+//! w̄ the mean of a cell's corners, which is the integral of w(s, t) over the unit square. So
+//! a cell is chosen with probability ∝ w̄ Ω (two alias tables: the row, then the column), and
+//! inside it (s, t) by the bilinear warp `radia_sampling::warp::square_to_bilinear`
+//! (marginal linear in t, then conditional linear in s). The density is continuous over the
+//! sphere (neighbouring cells share the edge's two corners; only at the poles, where a row of
+//! texels meets in one point, does it depend on the direction of approach), tracks the
+//! radiance (bilinear in (s, θ) with the same corners, up to the luminance weighting) and has
+//! no 1/sin θ at the poles. Wherever the radiance is positive so is the density, unless MIS
+//! compensation zeroed the weights there: both interpolate the same corners with positive
+//! coefficients inside a cell and along its edges, so the density vanishes only where all the
+//! corners it interpolates have zero weight (black texels, or compensated ones). The ratio
+//! radiance / pdf is bounded except next to a pole whose row has zero weight (radiance ∝ θ,
+//! density ∝ 1 − cos θ there), where its variance stays finite.
+//!
+//! Mitsuba (`Marginal2D` of `include/mitsuba/core/distr_2d.h` over the W + 1 × H texel grid,
+//! weights luminance · sin θ bilinear in (u, v), pdf / (2π² sin θ)) samples the same cells
+//! with a density bilinear in (u, θ) rather than (u, cos θ); both are unbiased, the images
+//! agree in expectation.
 
 use crate::description::RgbImage;
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 use radia_math::{luminance, safe_acos, safe_sqrt, Spectrum, INV_PI, INV_TWO_PI, PI};
-use radia_sampling::DiscreteDistribution;
+use radia_sampling::{warp, DiscreteDistribution};
 
 use super::EmitterSample;
 
@@ -46,12 +68,20 @@ pub struct Envmap {
     to_local: Mat3,
     /// cos θ of texel rows 0..H: the borders of the sampling cells (descending from 1 to −1).
     row_cos: Vec<f32>,
+    /// Per row of cells j, the distance of cos θ to a pole at its two borders (rows j and
+    /// j + 1), to full f32 precision: 1 − cos θ if row j is in the upper hemisphere, else
+    /// 1 + cos θ (a row of cells straddling the horizon measures both borders from the
+    /// zenith). Interpolated in it, t keeps its precision in the rows next to the poles, where
+    /// cos θ itself varies by a few ulps only (`cell_cos_sin`, `cell_t`).
+    cell_pole_dist: Vec<[f32; 2]>,
     /// Row of cells ∝ its weight; `None` when the map is black (nothing to sample).
     rows: Option<DiscreteDistribution>,
-    /// Per row of cells: the column ∝ mean luminance.
+    /// Per row of cells: the column ∝ mean corner weight.
     columns: Vec<Option<DiscreteDistribution>>,
-    /// Solid-angle density in each cell, row-major ((H − 1) × W).
-    cell_pdf: Vec<f32>,
+    /// Sampling weight of every texel (H × W, row-major; see the module docs).
+    weight: Vec<f32>,
+    /// 1 / Σ_cells w̄ Ω: the density is the interpolated weight times it (0 for a black map).
+    inv_total: f32,
     /// ∫ max-RGB-component radiance dω over the sphere (its power estimate).
     radiance_integral: f32,
 }
@@ -84,11 +114,28 @@ impl Envmap {
         } else {
             0.0
         };
-        let weight: Vec<f32> = lum.iter().map(|&l| (l - offset).max(0.0)).collect();
         let max_rgb: Vec<f32> = texels.iter().map(|c| c.max_element().max(0.0)).collect();
+        // The luminance, floored at a fraction of the largest component (module docs).
+        const MIN_WEIGHT_OF_MAX_RGB: f32 = 0.01;
+        let weight: Vec<f32> = lum
+            .iter()
+            .zip(&max_rgb)
+            .map(|(&l, &m)| (l.max(MIN_WEIGHT_OF_MAX_RGB * m) - offset).max(0.0))
+            .collect();
 
         let row_cos: Vec<f32> = (0..h)
             .map(|j| (j as f64 * std::f64::consts::PI / (h - 1) as f64).cos() as f32)
+            .collect();
+        let cell_pole_dist: Vec<[f32; 2]> = (0..h - 1)
+            .map(|j| {
+                let upper = Self::upper(j, h);
+                [j, j + 1].map(|r| {
+                    let half = 0.5 * r as f64 * std::f64::consts::PI / (h - 1) as f64;
+                    // 1 − cos θ = 2 sin² θ/2, 1 + cos θ = 2 cos² θ/2.
+                    let d = if upper { half.sin() } else { half.cos() };
+                    (2.0 * d * d) as f32
+                })
+            })
             .collect();
         let dphi = std::f64::consts::TAU / w as f64;
         let mut cell_mean = vec![0.0f32; (h - 1) * w];
@@ -114,13 +161,10 @@ impl Envmap {
         let columns = (0..h - 1)
             .map(|j| DiscreteDistribution::new(&cell_mean[j * w..(j + 1) * w]))
             .collect();
-        let cell_pdf = if total > 0.0 {
-            cell_mean
-                .iter()
-                .map(|&m| (m as f64 / total) as f32)
-                .collect()
+        let inv_total = if total > 0.0 {
+            (1.0 / total) as f32
         } else {
-            vec![0.0; cell_mean.len()]
+            0.0
         };
         let to_world = Mat3::from(to_world.matrix3);
         Self {
@@ -130,9 +174,11 @@ impl Envmap {
             to_world,
             to_local: to_world.inverse(),
             row_cos,
+            cell_pole_dist,
             rows,
             columns,
-            cell_pdf,
+            weight,
+            inv_total,
             radiance_integral: integral as f32,
         }
     }
@@ -168,37 +214,103 @@ impl Envmap {
         top * (1.0 - fy) + bottom * fy
     }
 
-    /// The sampling cell (column, row) of a unit direction in the emitter's frame.
+    /// Whether texel row j lies above the horizon (θⱼ < π/2; the cells from row j down
+    /// to row j + 1 interpolate 1 − cos θ then, otherwise 1 + cos θ).
     #[inline]
-    fn cell_of(&self, d: Vec3) -> (usize, usize) {
+    fn upper(j: usize, h: usize) -> bool {
+        2 * j < h - 1
+    }
+
+    /// cos θ and sin θ at fraction t of row of cells j (t = 0 at row j, 1 at row j + 1),
+    /// interpolated in `cell_pole_dist` so that the direction carries t to full precision.
+    #[inline]
+    fn cell_cos_sin(&self, j: usize, t: f32) -> (f32, f32) {
+        let [p0, p1] = self.cell_pole_dist[j];
+        let p = p0 + (p1 - p0) * t;
+        // sin² θ = (1 − cos θ)(1 + cos θ) = p (2 − p).
+        let sin_theta = safe_sqrt(p * (2.0 - p));
+        if Self::upper(j, self.height) {
+            (1.0 - p, sin_theta)
+        } else {
+            (p - 1.0, sin_theta)
+        }
+    }
+
+    /// Inverse of [`Envmap::cell_cos_sin`] for a unit direction in the emitter's frame.
+    #[inline]
+    fn cell_t(&self, j: usize, d: Vec3) -> f32 {
+        let sin2 = d.x * d.x + d.z * d.z;
+        // 1 ∓ cos θ, from sin² θ / (1 ± cos θ) near the pole it measures from.
+        let p = if Self::upper(j, self.height) {
+            if d.y > 0.0 {
+                sin2 / (1.0 + d.y)
+            } else {
+                1.0 - d.y
+            }
+        } else if d.y < 0.0 {
+            sin2 / (1.0 - d.y)
+        } else {
+            1.0 + d.y
+        };
+        let [p0, p1] = self.cell_pole_dist[j];
+        ((p - p0) / (p1 - p0)).clamp(0.0, 1.0)
+    }
+
+    /// The sampling cell (column i, row j) of a unit direction in the emitter's frame, and the
+    /// direction's coordinates (s, t) in it (see the module docs).
+    #[inline]
+    fn cell_of(&self, d: Vec3) -> (usize, usize, Vec2) {
         let w = self.width;
         let mut u = d.x.atan2(-d.z) * INV_TWO_PI;
         u -= u.floor();
-        let i = ((u * w as f32 - 0.5).floor() as i64).rem_euclid(w as i64) as usize;
+        let x = u * w as f32 - 0.5;
+        let x0 = x.floor();
+        let i = (x0 as i64).rem_euclid(w as i64) as usize;
         // Rows by comparison with the same cos θ table sampling interpolates in.
         let inner = &self.row_cos[1..self.height - 1];
         let j = inner.partition_point(|&c| c > d.y);
-        (i, j)
+        (i, j, Vec2::new((x - x0).clamp(0.0, 1.0), self.cell_t(j, d)))
     }
 
-    /// Samples a direction by luminance · solid angle (see the module docs).
+    /// The weights at the corners of cell (i, j), in the order of
+    /// [`warp::square_to_bilinear`]: (s, t) = (0, 0), (1, 0), (0, 1), (1, 1).
+    #[inline]
+    fn corners(&self, i: usize, j: usize) -> [f32; 4] {
+        let w = self.width;
+        let i1 = if i + 1 == w { 0 } else { i + 1 };
+        let (r0, r1) = (j * w, (j + 1) * w);
+        [
+            self.weight[r0 + i],
+            self.weight[r0 + i1],
+            self.weight[r1 + i],
+            self.weight[r1 + i1],
+        ]
+    }
+
+    /// Samples a direction with a density bilinear in the texels' weights per steradian (see
+    /// the module docs).
     #[inline]
     pub fn sample_direction(&self, u: Vec2) -> Option<EmitterSample> {
         let row = self.rows.as_ref()?.sample(u.x);
         let col = self.columns[row.index].as_ref()?.sample(u.y);
         let (i, j) = (col.index, row.index);
-        let (c0, c1) = (self.row_cos[j], self.row_cos[j + 1]);
-        let cos_theta = c0 + (c1 - c0) * row.u_remapped;
-        let sin_theta = safe_sqrt(1.0 - cos_theta * cos_theta);
-        let phi = 2.0 * PI * (i as f32 + 0.5 + col.u_remapped) / self.width as f32;
+        let corners = self.corners(i, j);
+        let st = warp::square_to_bilinear(Vec2::new(col.u_remapped, row.u_remapped), corners);
+        let (cos_theta, sin_theta) = self.cell_cos_sin(j, st.y);
+        let phi = 2.0 * PI * (i as f32 + 0.5 + st.x) / self.width as f32;
         let (sin_phi, cos_phi) = phi.sin_cos();
         let local = Vec3::new(sin_phi * sin_theta, cos_theta, -cos_phi * sin_theta);
-        let pdf = self.cell_pdf[j * self.width + i];
-        if !(pdf > 0.0) {
+        let d = (self.to_world * local).normalize();
+        // Exactly `pdf_direction(d)`: the density at the direction returned, which differs
+        // from w(st) · inv_total by the round-off of the direction (relatively, up to ~1e-5
+        // where the weights change a thousandfold across a cell). Zero only on an edge
+        // between zero-weight corners, where a sample lands with probability zero.
+        let pdf = self.pdf_local((self.to_local * d).normalize());
+        if pdf.is_nan() || pdf <= 0.0 {
             return None;
         }
         Some(EmitterSample {
-            d: (self.to_world * local).normalize(),
+            d,
             dist: f32::INFINITY,
             p: Vec3::ZERO,
             pdf,
@@ -213,7 +325,13 @@ impl Envmap {
         if self.rows.is_none() {
             return 0.0;
         }
-        let (i, j) = self.cell_of((self.to_local * d).normalize());
-        self.cell_pdf[j * self.width + i]
+        self.pdf_local((self.to_local * d).normalize())
+    }
+
+    /// Solid-angle density at a unit direction in the emitter's frame.
+    #[inline]
+    fn pdf_local(&self, d: Vec3) -> f32 {
+        let (i, j, st) = self.cell_of(d);
+        warp::bilerp(st, self.corners(i, j)) * self.inv_total
     }
 }
