@@ -12,8 +12,9 @@
 //! ```
 //!
 //! The sample count becomes ry = ⌊√n⌋, rx = ⌈n / ry⌉ (a near-square grid). For a request
-//! at dimension `dim` with permutation seed `ps = seed + dim` (`seed` the pixel's
-//! per-sequence seed, the [`PixelKey`] here): sample `i` takes the shuffled index
+//! at dimension `dim` with permutation seed `ps` (Mitsuba: `seed + dim`, `seed` the pixel's
+//! per-sequence seed, the [`PixelKey`] here; radia hashes the pair, `permute::dim_seed`,
+//! so that distinct dimensions are independent): sample `i` takes the shuffled index
 //! s = `permute_kensler(i, n, ps · 0x51633e2d)`, the cell x = s mod rx, y = s div rx, and
 //! inside it the sub-stratum given by permuting the *other* coordinate with one permutation
 //! shared by the whole row or column, which is what keeps both projections stratified:
@@ -25,7 +26,7 @@
 //! 0x45fbe943. The jitter is a hash of (key, index, dim) instead of Mitsuba's PCG32 stream;
 //! with `jitter = false` values sit at the centres of their (sub-)strata.
 
-use super::permute::{in_stratum, permute_kensler, sequence};
+use super::permute::{dim_seed, in_stratum, permute_kensler, sequence};
 use super::{floor_sqrt, hash4, unit_f32, PixelKey, Sampler, SamplerKind};
 use glam::Vec2;
 
@@ -68,7 +69,7 @@ impl Sampler for MultijitterSampler {
     fn get_1d(&self, key: PixelKey, index: u32, dim: u32) -> f32 {
         let n = self.sample_count;
         let (seed, i) = sequence(key, index, n);
-        let ps = seed.wrapping_add(dim);
+        let ps = dim_seed(seed, dim);
         let p = permute_kensler(i, n, ps.wrapping_mul(0x45fb_e943));
         let j = if self.jitter {
             unit_f32(hash4(key, index, dim, 0) as u32)
@@ -82,7 +83,7 @@ impl Sampler for MultijitterSampler {
     fn get_2d(&self, key: PixelKey, index: u32, dim: u32) -> Vec2 {
         let (n, rx, ry) = (self.sample_count, self.rx, self.ry);
         let (seed, i) = sequence(key, index, n);
-        let ps = seed.wrapping_add(dim);
+        let ps = dim_seed(seed, dim);
         let s = permute_kensler(i, n, ps.wrapping_mul(0x5163_3e2d));
         let (x, y) = (s % rx, s / rx);
         let sx = permute_kensler(x, rx, ps.wrapping_mul(0x68bc_21eb));

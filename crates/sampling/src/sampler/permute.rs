@@ -95,6 +95,18 @@ pub(super) fn sequence(key: PixelKey, index: u32, n: u32) -> (u32, u32) {
     (seed, index % n)
 }
 
+/// The permutation seed of dimension `dim` of a sequence. Mitsuba uses
+/// `per_sequence_seed + dimension_index` directly; with Kensler's permutation (and the
+/// two-round TEA shuffle) nearby seeds give nearly the same permutation (at 4 samples per
+/// pixel, seeds 8 apart give the same one), so dimensions a few apart were strongly
+/// correlated (correlation 0.9 between the values of one sample index over many pixels).
+/// Hashing the pair keeps every permutation a permutation and makes distinct dimensions
+/// independent.
+#[inline]
+pub(super) fn dim_seed(seed: u32, dim: u32) -> u32 {
+    mix64(((seed as u64) << 32) | dim as u64) as u32
+}
+
 /// A value in stratum `s` of `0..n` (width 1/n) at fraction `j` ∈ [0, 1) of it:
 /// (s + j) / n rounded down to a float, but never below the stratum's lower edge, so that
 /// s/n ≤ value < (s + 1)/n holds exactly (for n < 2²⁴). The value stays below 1, which

@@ -11,9 +11,11 @@
 //! ```
 //!
 //! As in Mitsuba, sample `i` of a request at dimension `dim` takes stratum
-//! `permute_kensler(i, n, seed + dim)`, where `seed` is the pixel's per-sequence seed (here
-//! the [`PixelKey`]; Mitsuba hashes its base seed with the sequence index, `sampler.cpp`
-//! `compute_per_sequence_seed`), so distinct dimensions get independent permutations. A 2D
+//! `permute_kensler(i, n, ps)`, where `ps` is the permutation seed of the dimension. Mitsuba
+//! takes ps = `seed + dim` with `seed` the pixel's per-sequence seed (`sampler.cpp`
+//! `compute_per_sequence_seed`; here the [`PixelKey`]); radia hashes the pair instead
+//! (`permute::dim_seed`: with `seed + dim`, dimensions 4 or 8 apart took nearly the same
+//! permutation), so distinct dimensions get independent permutations. A 2D
 //! request maps its stratum p to the cell (p mod r, p div r). The jitter, which Mitsuba
 //! draws from the pixel's PCG32 stream, is a hash of (key, index, dim) here; with
 //! `jitter = false` every sample sits at its stratum's centre.
@@ -21,7 +23,7 @@
 //! The stratification is 1D or 2D per request only: the 1D projections of a 2D request
 //! clump (r samples per 1/r column), which `multijitter` avoids.
 
-use super::permute::{in_stratum, permute_kensler, sequence};
+use super::permute::{dim_seed, in_stratum, permute_kensler, sequence};
 use super::{floor_sqrt, hash4, unit_f32, PixelKey, Sampler, SamplerKind};
 use glam::Vec2;
 
@@ -64,7 +66,7 @@ impl Sampler for StratifiedSampler {
     fn get_1d(&self, key: PixelKey, index: u32, dim: u32) -> f32 {
         let n = self.sample_count;
         let (seed, i) = sequence(key, index, n);
-        let p = permute_kensler(i, n, seed.wrapping_add(dim));
+        let p = permute_kensler(i, n, dim_seed(seed, dim));
         let j = if self.jitter {
             unit_f32(hash4(key, index, dim, 0) as u32)
         } else {
@@ -77,7 +79,7 @@ impl Sampler for StratifiedSampler {
     fn get_2d(&self, key: PixelKey, index: u32, dim: u32) -> Vec2 {
         let (n, r) = (self.sample_count, self.resolution);
         let (seed, i) = sequence(key, index, n);
-        let p = permute_kensler(i, n, seed.wrapping_add(dim));
+        let p = permute_kensler(i, n, dim_seed(seed, dim));
         let (jx, jy) = self.jitter_2d(key, index, dim);
         Vec2::new(in_stratum(p % r, r, jx), in_stratum(p / r, r, jy))
     }
