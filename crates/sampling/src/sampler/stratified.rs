@@ -14,7 +14,7 @@
 //! `permute_kensler(i, n, ps)`, where `ps` is the permutation seed of the dimension. Mitsuba
 //! takes ps = `seed + dim` with `seed` the pixel's per-sequence seed (`sampler.cpp`
 //! `compute_per_sequence_seed`; here the [`PixelKey`]); radia hashes the pair instead
-//! (`permute::dim_seed`: with `seed + dim`, dimensions 4 or 8 apart took nearly the same
+//! (`permute::dim_seed`: with `seed + dim`, dimensions 4 to 16 apart took nearly the same
 //! permutation), so distinct dimensions get independent permutations. A 2D
 //! request maps its stratum p to the cell (p mod r, p div r). The jitter, which Mitsuba
 //! draws from the pixel's PCG32 stream, is a hash of (key, index, dim) here; with
