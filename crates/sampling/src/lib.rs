@@ -15,8 +15,9 @@ pub mod warp;
 
 pub use discrete::DiscreteDistribution;
 pub use sampler::{
-    hash4, mix64, unit_f32, AnySampler, IndependentSampler, PixelKey, SampleStream, Sampler,
-    SamplerKind, SobolSampler,
+    hash4, mix64, unit_f32, AnySampler, IndependentSampler, LowDiscrepancySampler,
+    MultijitterSampler, OrthogonalSampler, PixelKey, SampleStream, Sampler, SamplerKind,
+    SobolSampler, StratifiedSampler,
 };
 
 /// Significance level of each chi-square test in this crate's own suite that is expected to

@@ -27,10 +27,19 @@
 //! one 4D Sobol set.
 
 mod independent;
+mod ldsampler;
+mod multijitter;
+mod orthogonal;
+mod permute;
 mod sobol;
+mod stratified;
 
 pub use independent::IndependentSampler;
+pub use ldsampler::LowDiscrepancySampler;
+pub use multijitter::MultijitterSampler;
+pub use orthogonal::OrthogonalSampler;
 pub use sobol::SobolSampler;
+pub use stratified::StratifiedSampler;
 
 use glam::{UVec2, Vec2};
 
@@ -213,6 +222,10 @@ fn is_prime(x: u32) -> bool {
 #[derive(Clone, Debug)]
 pub enum AnySampler {
     Independent(IndependentSampler),
+    Stratified(StratifiedSampler),
+    Multijitter(MultijitterSampler),
+    Orthogonal(OrthogonalSampler),
+    LowDiscrepancy(LowDiscrepancySampler),
     Sobol(SobolSampler),
 }
 
@@ -223,15 +236,29 @@ impl AnySampler {
         let n = kind.round_sample_count(spp);
         match kind {
             SamplerKind::Independent => AnySampler::Independent(IndependentSampler::new(n)),
+            SamplerKind::Stratified { jitter } => {
+                AnySampler::Stratified(StratifiedSampler::new(n, jitter))
+            }
+            SamplerKind::Multijitter { jitter } => {
+                AnySampler::Multijitter(MultijitterSampler::new(n, jitter))
+            }
+            SamplerKind::Orthogonal { jitter, strength } => {
+                AnySampler::Orthogonal(OrthogonalSampler::new(n, jitter, strength))
+            }
+            SamplerKind::LowDiscrepancy => {
+                AnySampler::LowDiscrepancy(LowDiscrepancySampler::new(n))
+            }
             SamplerKind::Sobol => AnySampler::Sobol(SobolSampler::new(n)),
-            // Until the stratified family lands, unreachable from the loader.
-            _ => AnySampler::Sobol(SobolSampler::new(n)),
         }
     }
 
     pub fn sample_count(&self) -> u32 {
         match self {
             AnySampler::Independent(s) => s.sample_count(),
+            AnySampler::Stratified(s) => s.sample_count(),
+            AnySampler::Multijitter(s) => s.sample_count(),
+            AnySampler::Orthogonal(s) => s.sample_count(),
+            AnySampler::LowDiscrepancy(s) => s.sample_count(),
             AnySampler::Sobol(s) => s.sample_count(),
         }
     }
@@ -243,6 +270,10 @@ macro_rules! with_sampler {
     ($any:expr, $s:ident => $body:expr) => {
         match $any {
             $crate::AnySampler::Independent($s) => $body,
+            $crate::AnySampler::Stratified($s) => $body,
+            $crate::AnySampler::Multijitter($s) => $body,
+            $crate::AnySampler::Orthogonal($s) => $body,
+            $crate::AnySampler::LowDiscrepancy($s) => $body,
             $crate::AnySampler::Sobol($s) => $body,
         }
     };

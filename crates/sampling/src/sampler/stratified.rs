@@ -1,0 +1,86 @@
+//! Mitsuba's `stratified` sampler (`src/samplers/stratified.cpp`): the n = r² samples of a
+//! pixel take the n strata of every 1D dimension and the r × r cells of every 2D request in
+//! a random order, each jittered inside its stratum.
+//!
+//! ```xml
+//! <sampler type="stratified">
+//!     <integer name="sample_count" value="64"/>
+//!     <integer name="seed" value="0"/>
+//!     <boolean name="jitter" value="true"/>
+//! </sampler>
+//! ```
+//!
+//! As in Mitsuba, sample `i` of a request at dimension `dim` takes stratum
+//! `permute_kensler(i, n, ps)`, where `ps` is the permutation seed of the dimension. Mitsuba
+//! takes ps = `seed + dim` with `seed` the pixel's per-sequence seed (`sampler.cpp`
+//! `compute_per_sequence_seed`; here the [`PixelKey`]); radia hashes the pair instead
+//! (`permute::dim_seed`: with `seed + dim`, dimensions 4 to 16 apart took nearly the same
+//! permutation), so distinct dimensions get independent permutations. A 2D
+//! request maps its stratum p to the cell (p mod r, p div r). The jitter, which Mitsuba
+//! draws from the pixel's PCG32 stream, is a hash of (key, index, dim) here; with
+//! `jitter = false` every sample sits at its stratum's centre.
+//!
+//! The stratification is 1D or 2D per request only: the 1D projections of a 2D request
+//! clump (r samples per 1/r column), which `multijitter` avoids.
+
+use super::permute::{dim_seed, in_stratum, permute_kensler, sequence};
+use super::{floor_sqrt, hash4, unit_f32, PixelKey, Sampler, SamplerKind};
+use glam::Vec2;
+
+#[derive(Clone, Debug)]
+pub struct StratifiedSampler {
+    sample_count: u32,
+    resolution: u32,
+    jitter: bool,
+}
+
+impl StratifiedSampler {
+    /// `sample_count` is rounded up to a square (Mitsuba's `set_sample_count`).
+    pub fn new(sample_count: u32, jitter: bool) -> Self {
+        let n = SamplerKind::Stratified { jitter }.round_sample_count(sample_count);
+        let r = floor_sqrt(n);
+        Self {
+            sample_count: n,
+            resolution: r,
+            jitter,
+        }
+    }
+
+    #[inline]
+    fn jitter_2d(&self, key: PixelKey, index: u32, dim: u32) -> (f32, f32) {
+        if self.jitter {
+            let h = hash4(key, index, dim, 0);
+            (unit_f32(h as u32), unit_f32((h >> 32) as u32))
+        } else {
+            (0.5, 0.5)
+        }
+    }
+}
+
+impl Sampler for StratifiedSampler {
+    fn sample_count(&self) -> u32 {
+        self.sample_count
+    }
+
+    #[inline]
+    fn get_1d(&self, key: PixelKey, index: u32, dim: u32) -> f32 {
+        let n = self.sample_count;
+        let (seed, i) = sequence(key, index, n);
+        let p = permute_kensler(i, n, dim_seed(seed, dim));
+        let j = if self.jitter {
+            unit_f32(hash4(key, index, dim, 0) as u32)
+        } else {
+            0.5
+        };
+        in_stratum(p, n, j)
+    }
+
+    #[inline]
+    fn get_2d(&self, key: PixelKey, index: u32, dim: u32) -> Vec2 {
+        let (n, r) = (self.sample_count, self.resolution);
+        let (seed, i) = sequence(key, index, n);
+        let p = permute_kensler(i, n, dim_seed(seed, dim));
+        let (jx, jy) = self.jitter_2d(key, index, dim);
+        Vec2::new(in_stratum(p % r, r, jx), in_stratum(p / r, r, jy))
+    }
+}
