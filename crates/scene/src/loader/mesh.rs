@@ -8,7 +8,7 @@ use glam::{DMat3, DMat4, Vec2, Vec3};
 use std::f32::consts::PI;
 
 /// A triangle mesh in object space.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub(crate) struct RawMesh {
     pub positions: Vec<Vec3>,
     /// Per-vertex normals from the file; a zero vector marks a vertex without one.
