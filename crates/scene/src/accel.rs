@@ -7,6 +7,7 @@ use crate::shape::{Shape, ShapeKind};
 use glam::{Vec2, Vec3};
 use obvhs::{aabb::Aabb, cwbvh::CwBvh, Boundable, BvhBuildParams};
 use radia_math::Ray;
+use rayon::prelude::*;
 use std::time::Duration;
 
 /// One primitive in BVH order: a triangle with its vertices inline (one cache line), or a
@@ -204,35 +205,40 @@ pub struct Accel {
 
 impl Accel {
     pub fn build(shapes: &[Shape]) -> Self {
-        let mut prims = Vec::new();
-        let mut bounds = Vec::new();
-        for (si, shape) in shapes.iter().enumerate() {
-            let shape_id = si as u32;
+        // Primitives are numbered shape by shape (a mesh's triangles in face order); `first[s]`
+        // is the number of shape s's first one. Bounds are made in parallel, and the
+        // primitives only once the BVH has fixed their order.
+        let mut first = Vec::with_capacity(shapes.len() + 1);
+        let mut total = 0usize;
+        for shape in shapes {
+            first.push(total);
+            total += match &shape.kind {
+                ShapeKind::Mesh(mesh) => mesh.indices.len(),
+                _ => 1,
+            };
+        }
+        first.push(total);
+        if total == 0 {
+            return Self {
+                bvh: CwBvh::default(),
+                primitives: Vec::new(),
+            };
+        }
+        let mut bounds = Vec::with_capacity(total);
+        for shape in shapes {
             match &shape.kind {
-                ShapeKind::Mesh(mesh) => {
-                    for (face, idx) in mesh.indices.iter().enumerate() {
-                        let p = idx.map(|i| mesh.positions[i as usize]);
-                        let mn = p[0].min(p[1]).min(p[2]);
-                        let mx = p[0].max(p[1]).max(p[2]);
-                        bounds.push(Bounded(Aabb::new(mn.into(), mx.into())));
-                        prims.push(Primitive::Triangle {
-                            p,
-                            shape: shape_id,
-                            face: face as u32,
-                        });
-                    }
-                }
+                ShapeKind::Mesh(mesh) => bounds.par_extend(mesh.indices.par_iter().map(|idx| {
+                    let p = idx.map(|i| mesh.positions[i as usize]);
+                    let mn = p[0].min(p[1]).min(p[2]);
+                    let mx = p[0].max(p[1]).max(p[2]);
+                    Bounded(Aabb::new(mn.into(), mx.into()))
+                })),
                 ShapeKind::Sphere { center, radius, .. } => {
                     let r = Vec3::splat(*radius);
                     bounds.push(Bounded(Aabb::new(
                         (*center - r).into(),
                         (*center + r).into(),
                     )));
-                    prims.push(Primitive::Sphere {
-                        center: *center,
-                        radius: *radius,
-                        shape: shape_id,
-                    });
                 }
                 ShapeKind::Disk { to_world, .. } => {
                     let mut aabb = Aabb::INVALID;
@@ -241,15 +247,8 @@ impl Accel {
                         aabb = aabb.union(&Aabb::from_point(p.into()));
                     }
                     bounds.push(Bounded(aabb));
-                    prims.push(Primitive::Disk { shape: shape_id });
                 }
             }
-        }
-        if prims.is_empty() {
-            return Self {
-                bvh: CwBvh::default(),
-                primitives: prims,
-            };
         }
         let bvh = obvhs::cwbvh::builder::build_cwbvh(
             &bounds,
@@ -260,10 +259,31 @@ impl Accel {
             wide::max_depth(&bvh) < wide::STACK_SIZE,
             "BVH deeper than the traversal stack"
         );
+        drop(bounds);
+        let primitive = |i: usize| {
+            let si = first.partition_point(|&f| f <= i) - 1;
+            let shape = si as u32;
+            match &shapes[si].kind {
+                ShapeKind::Mesh(mesh) => {
+                    let face = i - first[si];
+                    Primitive::Triangle {
+                        p: mesh.indices[face].map(|v| mesh.positions[v as usize]),
+                        shape,
+                        face: face as u32,
+                    }
+                }
+                ShapeKind::Sphere { center, radius, .. } => Primitive::Sphere {
+                    center: *center,
+                    radius: *radius,
+                    shape,
+                },
+                ShapeKind::Disk { .. } => Primitive::Disk { shape },
+            }
+        };
         let primitives = bvh
             .primitive_indices
-            .iter()
-            .map(|&i| prims[i as usize])
+            .par_iter()
+            .map(|&i| primitive(i as usize))
             .collect();
         Self { bvh, primitives }
     }

@@ -5,10 +5,11 @@
 
 use crate::Mesh;
 use glam::{DMat3, DMat4, Vec2, Vec3};
+use rayon::prelude::*;
 use std::f32::consts::PI;
 
 /// A triangle mesh in object space.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub(crate) struct RawMesh {
     pub positions: Vec<Vec3>,
     /// Per-vertex normals from the file; a zero vector marks a vertex without one.
@@ -43,25 +44,28 @@ pub(crate) fn finalize(
     }
     let normal_matrix = linear.inverse().transpose();
 
-    let mut positions = Vec::with_capacity(raw.positions.len());
-    for p in &raw.positions {
-        let w = to_world.transform_point3(p.as_dvec3()).as_vec3();
-        if !w.is_finite() {
-            return Err("the mesh contains invalid (non-finite) vertex positions".to_string());
-        }
-        positions.push(w);
+    // In parallel over vertices and triangles; the results (order and values) are those of a
+    // sequential loop.
+    let positions: Vec<Vec3> = raw
+        .positions
+        .par_iter()
+        .map(|p| to_world.transform_point3(p.as_dvec3()).as_vec3())
+        .collect();
+    if positions.par_iter().any(|w| !w.is_finite()) {
+        return Err("the mesh contains invalid (non-finite) vertex positions".to_string());
     }
 
     let mut stats = MeshStats::default();
-    let mut indices = Vec::with_capacity(raw.indices.len());
-    for t in &raw.indices {
-        let [a, b, c] = t.map(|i| positions[i as usize]);
-        if (b - a).cross(c - a).length_squared() > 0.0 {
-            indices.push(*t);
-        } else {
-            stats.degenerate += 1;
-        }
-    }
+    let indices: Vec<[u32; 3]> = raw
+        .indices
+        .par_iter()
+        .copied()
+        .filter(|t| {
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            (b - a).cross(c - a).length_squared() > 0.0
+        })
+        .collect();
+    stats.degenerate = raw.indices.len() - indices.len();
 
     let normals = if face_normals {
         None
@@ -69,17 +73,21 @@ pub(crate) fn finalize(
         let mut file_normals = raw.normals;
         let mut missing = file_normals.is_none();
         if let Some(ns) = &mut file_normals {
-            for n in ns.iter_mut() {
-                if *n == Vec3::ZERO {
-                    missing = true;
-                    continue;
-                }
-                let w = (normal_matrix * n.as_dvec3()).normalize().as_vec3();
-                if !w.is_finite() {
-                    return Err("the mesh contains invalid (non-finite) vertex normals".to_string());
-                }
-                *n = w;
+            // (zero normals: missing; transformed ones: non-finite)
+            let (zero, bad) = ns
+                .par_iter_mut()
+                .map(|n| {
+                    if *n == Vec3::ZERO {
+                        return (true, false);
+                    }
+                    *n = (normal_matrix * n.as_dvec3()).normalize().as_vec3();
+                    (false, !n.is_finite())
+                })
+                .reduce(|| (false, false), |a, b| (a.0 | b.0, a.1 | b.1));
+            if bad {
+                return Err("the mesh contains invalid (non-finite) vertex normals".to_string());
             }
+            missing |= zero;
         }
         if missing {
             let (computed, invalid) = recompute_vertex_normals(&positions, &indices);

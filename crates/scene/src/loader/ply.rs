@@ -44,6 +44,46 @@ impl Scalar {
     fn is_float(self) -> bool {
         matches!(self, Scalar::F16 | Scalar::F32 | Scalar::F64)
     }
+
+    /// Bytes in a binary file.
+    fn size(self) -> usize {
+        match self {
+            Scalar::I8 | Scalar::U8 => 1,
+            Scalar::I16 | Scalar::U16 | Scalar::F16 => 2,
+            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
+            Scalar::I64 | Scalar::U64 | Scalar::F64 => 8,
+        }
+    }
+}
+
+/// The binary value of type `t` at the start of `b` (which holds at least `t.size()` bytes),
+/// as f64 like [`Body::read`]. For the fixed-layout fast paths of [`parse_ply`].
+#[inline(always)]
+fn scalar_at(b: &[u8], t: Scalar, big: bool) -> f64 {
+    macro_rules! get {
+        ($ty:ty, $n:literal) => {{
+            let mut a = [0u8; $n];
+            a.copy_from_slice(&b[..$n]);
+            if big {
+                <$ty>::from_be_bytes(a)
+            } else {
+                <$ty>::from_le_bytes(a)
+            }
+        }};
+    }
+    match t {
+        Scalar::I8 => b[0] as i8 as f64,
+        Scalar::U8 => b[0] as f64,
+        Scalar::I16 => get!(i16, 2) as f64,
+        Scalar::U16 => get!(u16, 2) as f64,
+        Scalar::I32 => get!(i32, 4) as f64,
+        Scalar::U32 => get!(u32, 4) as f64,
+        Scalar::I64 => get!(i64, 8) as f64,
+        Scalar::U64 => get!(u64, 8) as f64,
+        Scalar::F16 => half_to_f32(get!(u16, 2)) as f64,
+        Scalar::F32 => get!(f32, 4) as f64,
+        Scalar::F64 => get!(f64, 8),
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -276,12 +316,33 @@ fn half_to_f32(h: u16) -> f32 {
 
 /// Parses a PLY file's bytes. `flip_tex_coords` maps v to 1 − v; with `skip_normals`
 /// (`face_normals`) normals are not kept.
+///
+/// Binary files take fast paths where the layout allows (the common case: a vertex element
+/// of scalars only, then a face element that is just the index list): vertices are read at
+/// fixed offsets of a fixed stride, and faces go straight to triangles without a list per
+/// face. The result, errors included, is the same as the general property-by-property
+/// reader's (a test compares them).
 pub(crate) fn parse_ply(
     data: &[u8],
     flip_tex_coords: bool,
     skip_normals: bool,
 ) -> Result<RawMesh, String> {
+    parse_ply_with(data, flip_tex_coords, skip_normals, true)
+}
+
+/// [`parse_ply`]; `fast: false` forces the general reader (for the tests).
+pub(crate) fn parse_ply_with(
+    data: &[u8],
+    flip_tex_coords: bool,
+    skip_normals: bool,
+    fast: bool,
+) -> Result<RawMesh, String> {
     let (format, elements, body_start) = parse_header(data)?;
+    let big = format == Format::Big;
+    let binary = fast && format != Format::Ascii;
+    // The first face error found by the fast face path, reported where the general path
+    // checks its polygons.
+    let mut face_error: Option<String> = None;
     let mut body = Body {
         data,
         pos: body_start,
@@ -327,30 +388,84 @@ pub(crate) fn parse_ply(
             let mut normals = Vec::with_capacity(if normal.is_some() { capacity } else { 0 });
             let mut uvs = Vec::with_capacity(if uv.is_some() { capacity } else { 0 });
             let mut row = vec![0.0f64; el.props.len()];
-            for _ in 0..el.count {
-                for (k, p) in el.props.iter().enumerate() {
-                    row[k] = match p.ty {
-                        PropType::Scalar(t) => body.read(t).ok_or_else(truncated)?,
-                        PropType::List(ct, it) => {
-                            let n = body.read(ct).ok_or_else(truncated)?;
-                            for _ in 0..n.max(0.0) as u64 {
-                                body.read(it).ok_or_else(truncated)?;
-                            }
-                            0.0
-                        }
-                    };
+            let scalars: Option<Vec<Scalar>> = el
+                .props
+                .iter()
+                .map(|p| match p.ty {
+                    PropType::Scalar(t) => Some(t),
+                    PropType::List(..) => None,
+                })
+                .collect();
+            if let (true, Some(types)) = (binary, scalars) {
+                // Fixed stride: each wanted property at its byte offset.
+                let mut offsets = Vec::with_capacity(types.len());
+                let mut stride = 0;
+                for t in &types {
+                    offsets.push(stride);
+                    stride += t.size();
                 }
-                mesh.positions
-                    .push(Vec3::new(row[x] as f32, row[y] as f32, row[z] as f32));
+                let len = el
+                    .count
+                    .checked_mul(stride)
+                    .filter(|&n| n <= data.len() - body.pos.min(data.len()))
+                    .ok_or_else(truncated)?;
+                let rows = &data[body.pos..body.pos + len];
+                body.pos += len;
+                let field = |r: &[u8], k: usize| -> f32 {
+                    let b = &r[offsets[k]..];
+                    if types[k] == Scalar::F32 {
+                        let a = [b[0], b[1], b[2], b[3]];
+                        if big {
+                            f32::from_be_bytes(a)
+                        } else {
+                            f32::from_le_bytes(a)
+                        }
+                    } else {
+                        scalar_at(b, types[k], big) as f32
+                    }
+                };
+                mesh.positions.extend(
+                    rows.chunks_exact(stride)
+                        .map(|r| Vec3::new(field(r, x), field(r, y), field(r, z))),
+                );
                 if let Some([a, b, c]) = normal {
-                    normals.push(Vec3::new(row[a] as f32, row[b] as f32, row[c] as f32));
+                    normals.extend(
+                        rows.chunks_exact(stride)
+                            .map(|r| Vec3::new(field(r, a), field(r, b), field(r, c))),
+                    );
                 }
                 if let Some([a, b]) = uv {
-                    let v = row[b] as f32;
-                    uvs.push(Vec2::new(
-                        row[a] as f32,
-                        if flip_tex_coords { 1.0 - v } else { v },
-                    ));
+                    uvs.extend(rows.chunks_exact(stride).map(|r| {
+                        let v = field(r, b);
+                        Vec2::new(field(r, a), if flip_tex_coords { 1.0 - v } else { v })
+                    }));
+                }
+            } else {
+                for _ in 0..el.count {
+                    for (k, p) in el.props.iter().enumerate() {
+                        row[k] = match p.ty {
+                            PropType::Scalar(t) => body.read(t).ok_or_else(truncated)?,
+                            PropType::List(ct, it) => {
+                                let n = body.read(ct).ok_or_else(truncated)?;
+                                for _ in 0..n.max(0.0) as u64 {
+                                    body.read(it).ok_or_else(truncated)?;
+                                }
+                                0.0
+                            }
+                        };
+                    }
+                    mesh.positions
+                        .push(Vec3::new(row[x] as f32, row[y] as f32, row[z] as f32));
+                    if let Some([a, b, c]) = normal {
+                        normals.push(Vec3::new(row[a] as f32, row[b] as f32, row[c] as f32));
+                    }
+                    if let Some([a, b]) = uv {
+                        let v = row[b] as f32;
+                        uvs.push(Vec2::new(
+                            row[a] as f32,
+                            if flip_tex_coords { 1.0 - v } else { v },
+                        ));
+                    }
                 }
             }
             if normal.is_some() {
@@ -378,6 +493,62 @@ pub(crate) fn parse_ply(
                     el.props[list].name
                 ));
             };
+            let fast_list = match el.props[list].ty {
+                PropType::List(ct, it)
+                    if binary && seen_vertex && el.props.len() == 1 && !it.is_float() =>
+                {
+                    Some((ct, it))
+                }
+                _ => None,
+            };
+            if let Some((ct, it)) = fast_list {
+                // Triangles straight from the bytes; the first invalid face is remembered
+                // and reported after the whole body was read, as the general path does.
+                let nv = mesh.positions.len();
+                let (cs, is) = (ct.size(), it.size());
+                mesh.indices.reserve(capacity);
+                let mut idx = Vec::new();
+                for f in 0..el.count {
+                    let c = data.get(body.pos..body.pos + cs).ok_or_else(truncated)?;
+                    let n = scalar_at(c, ct, big);
+                    if n < 0.0 {
+                        return Err("negative list length in the face element".into());
+                    }
+                    let start = body.pos + cs;
+                    let items = (n as usize)
+                        .checked_mul(is)
+                        .and_then(|len| data.get(start..start.checked_add(len)?))
+                        .ok_or_else(truncated)?;
+                    body.pos = start + items.len();
+                    if face_error.is_some() {
+                        continue;
+                    }
+                    if n < 3.0 {
+                        face_error = Some(format!(
+                            "face {f} has {} vertices (at least 3 are needed)",
+                            n as usize
+                        ));
+                        continue;
+                    }
+                    idx.clear();
+                    for b in items.chunks_exact(is) {
+                        let i = scalar_at(b, it, big);
+                        if !(i >= 0.0 && (i as usize) < nv) {
+                            face_error = Some(format!(
+                                "face {f} refers to vertex {i}, but there are only {nv} vertices"
+                            ));
+                            break;
+                        }
+                        idx.push(i as u32);
+                    }
+                    if face_error.is_none() {
+                        for k in 1..idx.len() - 1 {
+                            mesh.indices.push([idx[0], idx[k], idx[k + 1]]);
+                        }
+                    }
+                }
+                continue;
+            }
             polygons.reserve(capacity);
             for _ in 0..el.count {
                 for (k, p) in el.props.iter().enumerate() {
@@ -431,6 +602,9 @@ pub(crate) fn parse_ply(
         return Err("the file has no vertex element".into());
     }
 
+    if let Some(e) = face_error {
+        return Err(e);
+    }
     let nv = mesh.positions.len();
     for (f, poly) in polygons.iter().enumerate() {
         if poly.len() < 3 {

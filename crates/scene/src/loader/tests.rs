@@ -1106,6 +1106,130 @@ fn loader_ply_ascii_and_binary() {
     );
 }
 
+/// A binary PLY in the layout most exporters write (float x y z nx ny nz u v, then
+/// `list uchar int vertex_indices`), the one the reader's fast paths are for: a small grid with
+/// triangles and quads; `faces` replaces the face list when given.
+fn ply_float_grid(big_endian: bool, faces: Option<&[Vec<i32>]>) -> Vec<u8> {
+    let n = 5;
+    let mut default_faces = Vec::new();
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let a = j * n + i;
+            if (i + j) % 3 == 0 {
+                default_faces.push(vec![a, a + 1, a + n + 1, a + n]);
+            } else {
+                default_faces.push(vec![a, a + n, a + 1]);
+                default_faces.push(vec![a + 1, a + n, a + n + 1]);
+            }
+        }
+    }
+    let faces = faces.unwrap_or(&default_faces);
+    let fmt = if big_endian {
+        "binary_big_endian"
+    } else {
+        "binary_little_endian"
+    };
+    let mut out = format!(
+        "ply\nformat {fmt} 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+         property float nx\nproperty float ny\nproperty float nz\nproperty float u\nproperty float v\n\
+         element face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        n * n,
+        faces.len()
+    )
+    .into_bytes();
+    let put = |out: &mut Vec<u8>, b: [u8; 4]| {
+        out.extend(if big_endian {
+            [b[3], b[2], b[1], b[0]]
+        } else {
+            b
+        })
+    };
+    for j in 0..n {
+        for i in 0..n {
+            let (x, z) = (i as f32 / 3.0, j as f32 * 0.7);
+            let y = (x * 2.0).sin() * 0.1;
+            for v in [x, y, z, -0.2, 1.0, 0.1 * z, x * 0.3, 1.0 - z * 0.1] {
+                put(&mut out, v.to_le_bytes());
+            }
+        }
+    }
+    for f in faces {
+        out.push(f.len() as u8);
+        for &i in f {
+            put(&mut out, i.to_le_bytes());
+        }
+    }
+    out
+}
+
+#[test]
+fn loader_ply_fast_path_matches_general() {
+    let files = [
+        ("quad le", ply_binary_quad(false)),
+        ("quad be", ply_binary_quad(true)),
+        ("grid le", ply_float_grid(false, None)),
+        ("grid be", ply_float_grid(true, None)),
+        ("ascii", ply_ascii_quad().into_bytes()),
+    ];
+    for (what, data) in &files {
+        for (flip, skip) in [(false, false), (true, false), (false, true)] {
+            let fast = ply::parse_ply_with(data, flip, skip, true);
+            let general = ply::parse_ply_with(data, flip, skip, false);
+            assert!(fast.is_ok(), "{what}: {fast:?}");
+            assert_eq!(fast, general, "{what}, flip {flip}, skip normals {skip}");
+        }
+    }
+    let grid = ply::parse_ply(&files[2].1, false, false).expect("grid");
+    assert_eq!(grid.positions.len(), 25);
+    assert_eq!(grid.indices.len(), 32, "16 cells, two triangles each");
+    assert!(grid.normals.is_some() && grid.uvs.is_some());
+
+    // Invalid faces: the same error, found the same way, in both paths.
+    for (what, faces) in [
+        ("index out of range", vec![vec![0, 1, 2], vec![0, 25, 1]]),
+        ("negative index", vec![vec![0, 1, 2, 3], vec![-1, 1, 2]]),
+        (
+            "two vertices",
+            vec![vec![0, 1, 2], vec![0, 1], vec![0, 99, 1]],
+        ),
+    ] {
+        let data = ply_float_grid(false, Some(&faces));
+        let fast = ply::parse_ply_with(&data, false, false, true);
+        assert!(fast.is_err(), "{what}");
+        assert_eq!(
+            fast,
+            ply::parse_ply_with(&data, false, false, false),
+            "{what}"
+        );
+    }
+}
+
+#[test]
+fn loader_ply_truncated_binary_is_an_error() {
+    // Every cut through the body, in both paths: an error, never a panic, and the same one.
+    for data in [ply_float_grid(false, None), ply_binary_quad(true)] {
+        let body = data
+            .windows(11)
+            .position(|w| w == b"end_header\n")
+            .expect("header")
+            + 11;
+        for cut in body..data.len() {
+            let fast = ply::parse_ply_with(&data[..cut], false, false, true);
+            let e = fast.as_ref().expect_err("truncated");
+            assert!(e.contains("unexpected end of data"), "cut at {cut}: {e}");
+            assert_eq!(fast, ply::parse_ply_with(&data[..cut], false, false, false));
+        }
+    }
+    // Named by the loader.
+    let full = ply_float_grid(false, None);
+    let dir = write_files("ply-cut", &[("cut.ply", &full[..full.len() - 7])]);
+    let e = load_ply(&dir.join("cut.ply"), false).expect_err("truncated");
+    assert!(
+        e.to_string().contains("cut.ply") && e.to_string().contains("unexpected end"),
+        "{e}"
+    );
+}
+
 #[test]
 fn loader_obj_variants() {
     let obj = "# comment\no thing\n\
