@@ -20,8 +20,22 @@ use std::sync::atomic::AtomicBool;
 use std::sync::LazyLock;
 
 fn main() {
+    // One untimed render per sampler: checks the sample count and prints the path length,
+    // before divan's table.
+    for sampler in SAMPLERS {
+        let out = pass(&CORNELL, &options(sampler));
+        let samples = u64::from(RES * RES * SPP);
+        assert_eq!(out.stats.samples, samples);
+        assert_eq!(out.stats.invalid_samples, 0);
+        eprintln!(
+            "cornell {RES}x{RES} {SPP} spp {sampler}: {:.2} rays per sample",
+            out.stats.rays as f64 / samples as f64
+        );
+    }
     divan::main();
 }
+
+const SAMPLERS: [&str; 2] = ["independent", "sobol"];
 
 const RES: u32 = 64;
 const SPP: u32 = 4;
@@ -52,13 +66,6 @@ fn run(bencher: Bencher, sampler: &str, pool: Option<&rayon::ThreadPool>) {
     let scene = &*CORNELL;
     let options = options(sampler);
     let samples = (RES * RES * SPP) as usize;
-    let out = pass(scene, &options);
-    assert_eq!(out.stats.samples as usize, samples);
-    assert_eq!(out.stats.invalid_samples, 0);
-    eprintln!(
-        "cornell {RES}x{RES} {SPP} spp {sampler}: {:.2} rays per sample",
-        out.stats.rays as f64 / samples as f64
-    );
     bencher.counter(ItemsCount::new(samples)).bench(|| {
         let options = black_box(&options);
         match pool {
@@ -68,7 +75,7 @@ fn run(bencher: Bencher, sampler: &str, pool: Option<&rayon::ThreadPool>) {
     });
 }
 
-#[divan::bench(args = ["independent", "sobol"])]
+#[divan::bench(args = SAMPLERS)]
 fn single_thread(bencher: Bencher, sampler: &str) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
@@ -77,7 +84,7 @@ fn single_thread(bencher: Bencher, sampler: &str) {
     run(bencher, sampler, Some(&pool));
 }
 
-#[divan::bench(args = ["independent", "sobol"])]
+#[divan::bench(args = SAMPLERS)]
 fn all_threads(bencher: Bencher, sampler: &str) {
     run(bencher, sampler, None);
 }
