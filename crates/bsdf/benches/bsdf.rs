@@ -1,0 +1,162 @@
+//! BSDF throughput, scalar: `sample`, `eval` and `eval_pdf` of several models through the
+//! `Bsdf` enum (the dispatch the integrator pays), over fixed seeded inputs.
+//!
+//! Each model gets N = 4096 inputs (wi, u1, u2, wo), built once from a fixed seed: wi and
+//! wo cosine-distributed about +z (for the two-sided rough dielectric, half of each below the
+//! surface, so both reflection and refraction are exercised). `wo` is independent of `wi`,
+//! as for a light sample in next-event estimation. Every iteration makes N calls; divan's
+//! item counter reads as calls per second (Mitem/s = M calls/s).
+//!
+//! Run: `cargo bench -p radia-bsdf --bench bsdf` (quick: append `-- --sample-count 5`;
+//! one model: `-- roughplastic`).
+
+use divan::counter::ItemsCount;
+use divan::{black_box, Bencher};
+use glam::{Vec2, Vec3};
+use radia_bsdf::ior::lookup_conductor;
+use radia_bsdf::{
+    Bsdf, Diffuse, MicrofacetDistribution, MicrofacetType, Plastic, RoughConductor,
+    RoughDielectric, RoughPlastic, ShadingPoint,
+};
+use radia_sampling::warp::square_to_cosine_hemisphere;
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg64;
+use std::sync::LazyLock;
+
+fn main() {
+    divan::main();
+}
+
+const N: usize = 4096;
+
+const MODELS: &[&str] = &[
+    "diffuse",
+    "roughconductor_ggx",
+    "roughconductor_beckmann",
+    "roughdielectric_ggx",
+    "plastic",
+    "roughplastic_ggx",
+];
+
+struct Input {
+    wi: Vec3,
+    u1: f32,
+    u2: Vec2,
+    wo: Vec3,
+}
+
+struct Case {
+    bsdf: Bsdf,
+    inputs: Vec<Input>,
+}
+
+fn model(name: &str) -> (Bsdf, bool) {
+    let gold = lookup_conductor("Au").expect("Au preset");
+    let (eta, k) = (Vec3::from(gold.eta), Vec3::from(gold.k));
+    let ggx = |alpha| MicrofacetDistribution::new(MicrofacetType::Ggx, alpha, alpha, true);
+    match name {
+        "diffuse" => (Bsdf::Diffuse(Diffuse::new(Vec3::splat(0.5))), false),
+        "roughconductor_ggx" => (
+            Bsdf::RoughConductor(RoughConductor::new(ggx(0.2), eta, k, Vec3::ONE)),
+            false,
+        ),
+        "roughconductor_beckmann" => (
+            Bsdf::RoughConductor(RoughConductor::new(
+                MicrofacetDistribution::new(MicrofacetType::Beckmann, 0.2, 0.2, true),
+                eta,
+                k,
+                Vec3::ONE,
+            )),
+            false,
+        ),
+        "roughdielectric_ggx" => (
+            Bsdf::RoughDielectric(RoughDielectric::new(ggx(0.2), 1.5, 1.0)),
+            true,
+        ),
+        "plastic" => (
+            Bsdf::Plastic(Plastic::new(
+                1.49,
+                1.0,
+                Vec3::new(0.5, 0.3, 0.2),
+                Vec3::ONE,
+                false,
+            )),
+            false,
+        ),
+        "roughplastic_ggx" => (
+            Bsdf::RoughPlastic(RoughPlastic::new(
+                MicrofacetType::Ggx,
+                0.2,
+                true,
+                1.49,
+                1.0,
+                Vec3::new(0.5, 0.3, 0.2),
+                Vec3::ONE,
+                false,
+            )),
+            false,
+        ),
+        _ => unreachable!("unknown model {name}"),
+    }
+}
+
+static CASES: LazyLock<Vec<(&'static str, Case)>> = LazyLock::new(|| {
+    MODELS
+        .iter()
+        .enumerate()
+        .map(|(i, &name)| {
+            let (bsdf, two_sided) = model(name);
+            let mut rng = Pcg64::seed_from_u64(1000 + i as u64);
+            let dir = |rng: &mut Pcg64| {
+                let d = square_to_cosine_hemisphere(Vec2::new(rng.random(), rng.random()));
+                if two_sided && rng.random::<bool>() {
+                    -d
+                } else {
+                    d
+                }
+            };
+            let inputs = (0..N)
+                .map(|_| Input {
+                    wi: dir(&mut rng),
+                    u1: rng.random(),
+                    u2: Vec2::new(rng.random(), rng.random()),
+                    wo: dir(&mut rng),
+                })
+                .collect();
+            (name, Case { bsdf, inputs })
+        })
+        .collect()
+});
+
+fn case(name: &str) -> &'static Case {
+    &CASES.iter().find(|(n, _)| *n == name).unwrap().1
+}
+
+fn run<O>(bencher: Bencher, name: &str, f: impl Fn(&Bsdf, &ShadingPoint, &Input) -> O + Sync) {
+    let c = case(name);
+    let sp = ShadingPoint::default();
+    bencher.counter(ItemsCount::new(N)).bench(|| {
+        let bsdf = black_box(&c.bsdf);
+        for input in black_box(&c.inputs[..]) {
+            black_box(f(bsdf, &sp, input));
+        }
+    });
+}
+
+/// `Bsdf::sample(wi, u1, u2)`: a direction, its weight and pdf.
+#[divan::bench(args = MODELS)]
+fn sample(bencher: Bencher, name: &str) {
+    run(bencher, name, |b, sp, x| b.sample(sp, x.wi, x.u1, x.u2));
+}
+
+/// `Bsdf::eval(wi, wo)`.
+#[divan::bench(args = MODELS)]
+fn eval(bencher: Bencher, name: &str) {
+    run(bencher, name, |b, sp, x| b.eval(sp, x.wi, x.wo));
+}
+
+/// `Bsdf::eval_pdf(wi, wo)`: the next-event-estimation call.
+#[divan::bench(args = MODELS)]
+fn eval_pdf(bencher: Bencher, name: &str) {
+    run(bencher, name, |b, sp, x| b.eval_pdf(sp, x.wi, x.wo));
+}
