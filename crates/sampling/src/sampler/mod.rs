@@ -116,8 +116,9 @@ pub enum SamplerKind {
 }
 
 impl SamplerKind {
-    /// radia's sampler when a scene names none: Owen-scrambled Sobol, the best of them on
-    /// every scene of the benchmark (`validation/benchmark.py`), at any sample count.
+    /// radia's sampler when a scene names none: Owen-scrambled Sobol, the most efficient of
+    /// radia's samplers on 10 of the 12 scenes of `validation/benchmark.py` (stratified and
+    /// multijitter win on the envmap and furnace scenes), at any sample count.
     pub const DEFAULT: SamplerKind = SamplerKind::Sobol;
 
     /// The plugin name (`<sampler type="...">`).
