@@ -26,8 +26,8 @@
 //! 0x45fbe943. The jitter is a hash of (key, index, dim) instead of Mitsuba's PCG32 stream;
 //! with `jitter = false` values sit at the centres of their (sub-)strata.
 
-use super::permute::{dim_seed, in_stratum, permute_kensler, sequence};
-use super::{floor_sqrt, hash4, unit_f32, PixelKey, Sampler, SamplerKind};
+use super::permute::{dim_seed, in_stratum, jitter_1d, jitter_2d, permute_kensler, sequence};
+use super::{floor_sqrt, PixelKey, Sampler, SamplerKind};
 use glam::Vec2;
 
 #[derive(Clone, Debug)]
@@ -71,12 +71,7 @@ impl Sampler for MultijitterSampler {
         let (seed, i) = sequence(key, index, n);
         let ps = dim_seed(seed, dim);
         let p = permute_kensler(i, n, ps.wrapping_mul(0x45fb_e943));
-        let j = if self.jitter {
-            unit_f32(hash4(key, index, dim, 0) as u32)
-        } else {
-            0.5
-        };
-        in_stratum(p, n, j)
+        in_stratum(p, n, jitter_1d(self.jitter, key, index, dim))
     }
 
     #[inline]
@@ -88,12 +83,7 @@ impl Sampler for MultijitterSampler {
         let (x, y) = (s % rx, s / rx);
         let sx = permute_kensler(x, rx, ps.wrapping_mul(0x68bc_21eb));
         let sy = permute_kensler(y, ry, ps.wrapping_mul(0x02e5_be93));
-        let (jx, jy) = if self.jitter {
-            let h = hash4(key, index, dim, 0);
-            (unit_f32(h as u32), unit_f32((h >> 32) as u32))
-        } else {
-            (0.5, 0.5)
-        };
+        let (jx, jy) = jitter_2d(self.jitter, key, index, dim);
         // (x + (sy + jx) / ry) / rx is stratum x · ry + sy of n at fraction jx.
         Vec2::new(
             in_stratum(x * ry + sy, n, jx),

@@ -47,8 +47,8 @@
 //! The jitter is a hash of (key, index, dim) instead of Mitsuba's PCG32 stream; with
 //! `jitter = false` values sit at their sub-strata's centres.
 
-use super::permute::{in_stratum, permute_kensler, sequence};
-use super::{floor_sqrt, hash4, unit_f32, PixelKey, Sampler, SamplerKind};
+use super::permute::{in_stratum, jitter_1d, permute_kensler, sequence};
+use super::{floor_sqrt, PixelKey, Sampler, SamplerKind};
 use glam::Vec2;
 
 #[derive(Clone, Debug)]
@@ -90,11 +90,7 @@ impl OrthogonalSampler {
 
     #[inline]
     fn jitter(&self, key: PixelKey, index: u32, dim: u32) -> f32 {
-        if self.jitter {
-            unit_f32(hash4(key, index, dim, 0) as u32)
-        } else {
-            0.5
-        }
+        jitter_1d(self.jitter, key, index, dim)
     }
 
     /// Strength 2: Bose's construction.

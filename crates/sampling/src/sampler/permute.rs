@@ -5,7 +5,7 @@
 //! `permute_kensler`) and `include/mitsuba/core/qmc.h` (`radical_inverse_2`, `sobol_2`) of
 //! Mitsuba 3.9.1.
 
-use super::{mix64, PixelKey};
+use super::{hash4, mix64, unit_f32, PixelKey};
 
 /// The Tiny Encryption Algorithm as a hash of two words (Zafar et al. 2010), `rounds` rounds.
 #[inline]
@@ -213,5 +213,27 @@ mod tests {
                 }
             }
         }
+    }
+}
+
+/// The offset of a sample inside its stratum: a hash of (key, index, dim), or the centre
+/// without jitter. Mitsuba draws it from its PCG32 stream; a hash keeps values pure.
+#[inline]
+pub(crate) fn jitter_1d(on: bool, key: PixelKey, index: u32, dim: u32) -> f32 {
+    if on {
+        unit_f32(hash4(key, index, dim, 0) as u32)
+    } else {
+        0.5
+    }
+}
+
+/// Two independent offsets, as [`jitter_1d`] (the first equals `jitter_1d`'s).
+#[inline]
+pub(crate) fn jitter_2d(on: bool, key: PixelKey, index: u32, dim: u32) -> (f32, f32) {
+    if on {
+        let h = hash4(key, index, dim, 0);
+        (unit_f32(h as u32), unit_f32((h >> 32) as u32))
+    } else {
+        (0.5, 0.5)
     }
 }

@@ -23,8 +23,8 @@
 //! The stratification is 1D or 2D per request only: the 1D projections of a 2D request
 //! clump (r samples per 1/r column), which `multijitter` avoids.
 
-use super::permute::{dim_seed, in_stratum, permute_kensler, sequence};
-use super::{floor_sqrt, hash4, unit_f32, PixelKey, Sampler, SamplerKind};
+use super::permute::{dim_seed, in_stratum, jitter_1d, jitter_2d, permute_kensler, sequence};
+use super::{floor_sqrt, PixelKey, Sampler, SamplerKind};
 use glam::Vec2;
 
 #[derive(Clone, Debug)]
@@ -45,16 +45,6 @@ impl StratifiedSampler {
             jitter,
         }
     }
-
-    #[inline]
-    fn jitter_2d(&self, key: PixelKey, index: u32, dim: u32) -> (f32, f32) {
-        if self.jitter {
-            let h = hash4(key, index, dim, 0);
-            (unit_f32(h as u32), unit_f32((h >> 32) as u32))
-        } else {
-            (0.5, 0.5)
-        }
-    }
 }
 
 impl Sampler for StratifiedSampler {
@@ -67,12 +57,7 @@ impl Sampler for StratifiedSampler {
         let n = self.sample_count;
         let (seed, i) = sequence(key, index, n);
         let p = permute_kensler(i, n, dim_seed(seed, dim));
-        let j = if self.jitter {
-            unit_f32(hash4(key, index, dim, 0) as u32)
-        } else {
-            0.5
-        };
-        in_stratum(p, n, j)
+        in_stratum(p, n, jitter_1d(self.jitter, key, index, dim))
     }
 
     #[inline]
@@ -80,7 +65,7 @@ impl Sampler for StratifiedSampler {
         let (n, r) = (self.sample_count, self.resolution);
         let (seed, i) = sequence(key, index, n);
         let p = permute_kensler(i, n, dim_seed(seed, dim));
-        let (jx, jy) = self.jitter_2d(key, index, dim);
+        let (jx, jy) = jitter_2d(self.jitter, key, index, dim);
         Vec2::new(in_stratum(p % r, r, jx), in_stratum(p / r, r, jy))
     }
 }
