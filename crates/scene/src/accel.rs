@@ -61,22 +61,22 @@ pub struct Hit {
 /// Precomputed per-ray data of the watertight test (Woop, Benthin and Wald 2013, "Watertight
 /// Ray/Triangle Intersection", JCGT 2(1)): the ray is sheared so that it runs along +z, and
 /// edge functions decide inside/outside with a double-precision fallback on exact zeros, so
-/// no ray slips between two triangles that share an edge.
+/// no ray slips between two triangles that share an edge. The 8-wide test of
+/// [`wide::intersect_triangles`] computes the same values with the same operations.
 #[derive(Clone, Copy)]
-struct WatertightRay {
-    o: Vec3,
-    /// Rows of the shear that maps p − o to the ray's frame: x' = a[kx] − sx·a[kz],
-    /// y' = a[ky] − sy·a[kz], z' = sz·a[kz], where kz is the dominant axis of the direction.
-    /// As dot products with rows holding 1, −s and 0 they give the same floating-point values
-    /// as the paper's permuted form, without indexing by a run-time axis.
-    rx: Vec3,
-    ry: Vec3,
-    rz: Vec3,
+pub(crate) struct WatertightRay {
+    pub(crate) o: Vec3,
+    /// The axes of the ray's frame: `k[2]` is the dominant axis of the direction, `k[0]` and
+    /// `k[1]` the others (swapped when the direction along `k[2]` is negative, which keeps
+    /// the triangles' winding).
+    pub(crate) k: [usize; 3],
+    /// The shear: x' = a[k0] − s0·a[k2], y' = a[k1] − s1·a[k2], z' = s2·a[k2].
+    pub(crate) s: [f32; 3],
 }
 
 impl WatertightRay {
     #[inline(always)]
-    fn new(ray: &Ray) -> Self {
+    pub(crate) fn new(ray: &Ray) -> Self {
         let a = ray.d.abs();
         let kz = if a.x > a.y {
             if a.x > a.z {
@@ -95,40 +95,40 @@ impl WatertightRay {
             std::mem::swap(&mut kx, &mut ky);
         }
         let sz = 1.0 / ray.d[kz];
-        let axis = |k: usize, v: f32| {
-            let mut r = Vec3::ZERO;
-            r[k] = v;
-            r
-        };
-        let (sx, sy) = (ray.d[kx] * sz, ray.d[ky] * sz);
         Self {
             o: ray.o,
-            rx: axis(kx, 1.0) + axis(kz, -sx),
-            ry: axis(ky, 1.0) + axis(kz, -sy),
-            rz: axis(kz, sz),
+            k: [kx, ky, kz],
+            s: [ray.d[kx] * sz, ray.d[ky] * sz, sz],
         }
+    }
+
+    /// Vertex `p` in the ray's sheared frame, relative to its origin.
+    #[inline(always)]
+    fn shear(&self, p: Vec3) -> Vec3 {
+        let a = p - self.o;
+        let [kx, ky, kz] = self.k;
+        Vec3::new(
+            a[kx] - self.s[0] * a[kz],
+            a[ky] - self.s[1] * a[kz],
+            self.s[2] * a[kz],
+        )
     }
 
     /// Returns (t, b1, b2) for a hit with 0 < t < t_max.
     #[inline(always)]
-    fn intersect(&self, p: &[Vec3; 3], t_max: f32) -> Option<(f32, f32, f32)> {
-        let a = p[0] - self.o;
-        let b = p[1] - self.o;
-        let c = p[2] - self.o;
-        let (ax, ay) = (a.dot(self.rx), a.dot(self.ry));
-        let (bx, by) = (b.dot(self.rx), b.dot(self.ry));
-        let (cx, cy) = (c.dot(self.rx), c.dot(self.ry));
-        let mut u = cx * by - cy * bx;
-        let mut v = ax * cy - ay * cx;
-        let mut w = bx * ay - by * ax;
+    pub(crate) fn intersect(&self, p: &[Vec3; 3], t_max: f32) -> Option<(f32, f32, f32)> {
+        let a = self.shear(p[0]);
+        let b = self.shear(p[1]);
+        let c = self.shear(p[2]);
+        let mut u = c.x * b.y - c.y * b.x;
+        let mut v = a.x * c.y - a.y * c.x;
+        let mut w = b.x * a.y - b.y * a.x;
         if u == 0.0 || v == 0.0 || w == 0.0 {
             // Exactly on an edge in single precision: decide in double precision.
-            let (ax, ay, bx, by, cx, cy) = (
-                ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64,
-            );
-            u = (cx * by - cy * bx) as f32;
-            v = (ax * cy - ay * cx) as f32;
-            w = (bx * ay - by * ax) as f32;
+            let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
+            u = (c.x * b.y - c.y * b.x) as f32;
+            v = (a.x * c.y - a.y * c.x) as f32;
+            w = (b.x * a.y - b.y * a.x) as f32;
         }
         if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
             return None;
@@ -137,7 +137,7 @@ impl WatertightRay {
         if det == 0.0 {
             return None;
         }
-        let t_scaled = u * a.dot(self.rz) + v * b.dot(self.rz) + w * c.dot(self.rz);
+        let t_scaled = u * a.z + v * b.z + w * c.z;
         let inv_det = 1.0 / det;
         let t = t_scaled * inv_det;
         if !(t > 0.0 && t < t_max) {
@@ -201,6 +201,11 @@ pub struct Accel {
     bvh: CwBvh,
     /// Primitives reordered to BVH leaf order so a leaf's primitives are contiguous.
     pub primitives: Vec<Primitive>,
+    /// The triangles among them, as structure of arrays for the 8-wide test.
+    lanes: wide::TriangleLanes,
+    /// Bit i set when primitive i is analytic (tested one at a time); `None` when there are
+    /// none.
+    analytic: Option<Vec<u64>>,
 }
 
 impl Accel {
@@ -222,6 +227,8 @@ impl Accel {
             return Self {
                 bvh: CwBvh::default(),
                 primitives: Vec::new(),
+                lanes: wide::TriangleLanes::new(std::iter::empty()),
+                analytic: None,
             };
         }
         let mut bounds = Vec::with_capacity(total);
@@ -280,12 +287,102 @@ impl Accel {
                 ShapeKind::Disk { .. } => Primitive::Disk { shape },
             }
         };
-        let primitives = bvh
+        let primitives: Vec<Primitive> = bvh
             .primitive_indices
             .par_iter()
             .map(|&i| primitive(i as usize))
             .collect();
-        Self { bvh, primitives }
+        let lanes = wide::TriangleLanes::new(primitives.iter().map(|prim| match prim {
+            Primitive::Triangle { p, .. } => Some(*p),
+            _ => None,
+        }));
+        let analytic = primitives
+            .iter()
+            .any(|prim| !matches!(prim, Primitive::Triangle { .. }))
+            .then(|| {
+                let mut bits = vec![0u64; primitives.len() / 64 + 2];
+                for (i, prim) in primitives.iter().enumerate() {
+                    if !matches!(prim, Primitive::Triangle { .. }) {
+                        bits[i / 64] |= 1 << (i % 64);
+                    }
+                }
+                bits
+            });
+        Self {
+            bvh,
+            primitives,
+            lanes,
+            analytic,
+        }
+    }
+
+    /// Which of the primitives `base..base + 8` are analytic (bit i for `base + i`).
+    #[inline(always)]
+    fn analytic_lanes(&self, base: usize) -> u32 {
+        let Some(bits) = &self.analytic else {
+            return 0;
+        };
+        let (word, offset) = (base / 64, base % 64);
+        let mut v = bits[word] >> offset;
+        if offset > 56 {
+            v |= bits[word + 1] << (64 - offset);
+        }
+        (v & 0xff) as u32
+    }
+
+    /// The closest hit before `t_max` among the primitives `base + i` for the bits i of `mask`
+    /// (with `any_hit`, the first found), with its barycentrics in `bary`. Triangles are
+    /// tested eight at a time; analytic shapes, and triangles whose single-precision edge
+    /// functions were exactly zero, one at a time.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn intersect_leaves(
+        &self,
+        shapes: &[Shape],
+        wray: &WatertightRay,
+        ray: &Ray,
+        base: u32,
+        mask: u32,
+        mut t_max: f32,
+        any_hit: bool,
+        bary: &mut Vec2,
+    ) -> Option<(u32, f32)> {
+        let mut best = None;
+        let (mut base, mut mask) = (base as usize, mask);
+        while mask != 0 {
+            let lanes = mask & 0xff;
+            if lanes != 0 {
+                let analytic = self.analytic_lanes(base) & lanes;
+                let h = wide::intersect_triangles(&self.lanes, base, lanes & !analytic, wray, t_max);
+                let mut hits = h.hit;
+                while hits != 0 {
+                    let l = hits.trailing_zeros() as usize;
+                    hits &= hits - 1;
+                    if h.t[l] < t_max {
+                        t_max = h.t[l];
+                        best = Some(((base + l) as u32, t_max));
+                        *bary = Vec2::new(h.b1[l], h.b2[l]);
+                    }
+                }
+                let mut one_by_one = analytic | h.exact;
+                while one_by_one != 0 {
+                    let l = one_by_one.trailing_zeros() as usize;
+                    one_by_one &= one_by_one - 1;
+                    if let Some((t, b)) = self.intersect_prim(shapes, wray, ray, base + l, t_max)
+                    {
+                        t_max = t;
+                        best = Some(((base + l) as u32, t));
+                        *bary = b;
+                    }
+                }
+                if any_hit && best.is_some() {
+                    return best;
+                }
+            }
+            mask >>= 8;
+            base += 8;
+        }
+        best
     }
 
     #[inline(always)]
@@ -319,11 +416,10 @@ impl Accel {
         let wray = WatertightRay::new(ray);
         let node_ray = wide::NodeRay::new(ray.o, ray.d, ray.t_max);
         let mut bary = Vec2::ZERO;
-        let (prim, t) = wide::traverse(&self.bvh, &node_ray, ray.t_max, false, |prim, t_max| {
-            let (t, b) = self.intersect_prim(shapes, &wray, ray, prim as usize, t_max)?;
-            bary = b;
-            Some(t)
-        })?;
+        let (prim, t) =
+            wide::traverse(&self.bvh, &node_ray, ray.t_max, false, |base, mask, t_max| {
+                self.intersect_leaves(shapes, &wray, ray, base, mask, t_max, false, &mut bary)
+            })?;
         Some(Hit { t, prim, bary })
     }
 
@@ -335,9 +431,9 @@ impl Accel {
         }
         let wray = WatertightRay::new(ray);
         let node_ray = wide::NodeRay::new(ray.o, ray.d, ray.t_max);
-        wide::traverse(&self.bvh, &node_ray, ray.t_max, true, |prim, t_max| {
-            self.intersect_prim(shapes, &wray, ray, prim as usize, t_max)
-                .map(|(t, _)| t)
+        let mut bary = Vec2::ZERO;
+        wide::traverse(&self.bvh, &node_ray, ray.t_max, true, |base, mask, t_max| {
+            self.intersect_leaves(shapes, &wray, ray, base, mask, t_max, true, &mut bary)
         })
         .is_some()
     }

@@ -1,7 +1,8 @@
 //! The one place where ray traversal is vectorised: the 8-child node test of obvhs' compressed
 //! wide BVH (Ylitie, Karras and Laine 2017, "Efficient Incoherent Ray Traversal on GPUs
 //! Through Compressed Wide BVHs") in AVX2, all eight quantized child boxes against one ray at
-//! once, and the traversal loop of the paper with the primitive test inlined into it.
+//! once; the watertight test of eight triangles at once against one ray, over the triangles
+//! of a node's leaves stored as structure of arrays; and the traversal loop of the paper.
 //!
 //! obvhs' own `CwBvhNode::intersect_ray_simd` tests the children four at a time with SSE and
 //! converts each quantized plane with a scalar instruction; here one `vpmovzxbd` + `vcvtdq2ps`
@@ -12,6 +13,7 @@
 //! Without AVX2 at compile time the portable path (obvhs' node test, the same traversal) is
 //! used; both give the same hits because the exact primitive tests decide.
 
+use super::WatertightRay;
 use glam::{UVec2, Vec3, Vec3A};
 use obvhs::cwbvh::{node::CwBvhNode, CwBvh};
 
@@ -133,29 +135,125 @@ mod avx2 {
         let v = _mm_or_si128(v, _mm_shuffle_epi32::<0b10_11_00_01>(v));
         _mm_cvtsi128_si32(v) as u32
     }
+
+    /// Eight consecutive f32 from `v[base..]`.
+    #[inline(always)]
+    unsafe fn load(v: &[f32], base: usize) -> __m256 {
+        _mm256_loadu_ps(v.as_ptr().add(base))
+    }
+
+    #[inline(always)]
+    pub unsafe fn intersect_triangles(
+        tris: &TriangleLanes,
+        base: usize,
+        lanes: u32,
+        ray: &WatertightRay,
+        t_max: f32,
+    ) -> LaneHits {
+        let [kx, ky, kz] = ray.k;
+        let (ox, oy, oz) = (
+            _mm256_set1_ps(ray.o[kx]),
+            _mm256_set1_ps(ray.o[ky]),
+            _mm256_set1_ps(ray.o[kz]),
+        );
+        let (sx, sy, sz) = (
+            _mm256_set1_ps(ray.s[0]),
+            _mm256_set1_ps(ray.s[1]),
+            _mm256_set1_ps(ray.s[2]),
+        );
+        // Vertex k sheared into the ray's frame (`WatertightRay::shear`). No FMA: the scalar
+        // test rounds the product and the difference separately.
+        let shear = |k: usize| {
+            let c = &tris.coords;
+            let ax = _mm256_sub_ps(load(&c[3 * k + kx], base), ox);
+            let ay = _mm256_sub_ps(load(&c[3 * k + ky], base), oy);
+            let az = _mm256_sub_ps(load(&c[3 * k + kz], base), oz);
+            (
+                _mm256_sub_ps(ax, _mm256_mul_ps(sx, az)),
+                _mm256_sub_ps(ay, _mm256_mul_ps(sy, az)),
+                _mm256_mul_ps(sz, az),
+            )
+        };
+        let (ax, ay, az) = shear(0);
+        let (bx, by, bz) = shear(1);
+        let (cx, cy, cz) = shear(2);
+        let u = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
+        let v = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
+        let w = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
+        let zero = _mm256_setzero_ps();
+        let or3 = |a, b, c| _mm256_or_ps(_mm256_or_ps(a, b), c);
+        let exact = or3(
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(u, zero),
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(v, zero),
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(w, zero),
+        );
+        let neg = or3(
+            _mm256_cmp_ps::<_CMP_LT_OQ>(u, zero),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(v, zero),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(w, zero),
+        );
+        let pos = or3(
+            _mm256_cmp_ps::<_CMP_GT_OQ>(u, zero),
+            _mm256_cmp_ps::<_CMP_GT_OQ>(v, zero),
+            _mm256_cmp_ps::<_CMP_GT_OQ>(w, zero),
+        );
+        let det = _mm256_add_ps(_mm256_add_ps(u, v), w);
+        let t_scaled = _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(u, az), _mm256_mul_ps(v, bz)),
+            _mm256_mul_ps(w, cz),
+        );
+        let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), det);
+        let t = _mm256_mul_ps(t_scaled, inv_det);
+        let reject = _mm256_or_ps(
+            _mm256_and_ps(neg, pos),
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(det, zero),
+        );
+        let in_range = _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GT_OQ>(t, zero),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(t, _mm256_set1_ps(t_max)),
+        );
+        let hit = _mm256_andnot_ps(_mm256_or_ps(reject, exact), in_range);
+        let lanes = lanes & 0xff;
+        let mut out = LaneHits {
+            hit: _mm256_movemask_ps(hit) as u32 & lanes,
+            exact: _mm256_movemask_ps(exact) as u32 & lanes,
+            t: [0.0; 8],
+            b1: [0.0; 8],
+            b2: [0.0; 8],
+        };
+        if out.hit != 0 {
+            _mm256_storeu_ps(out.t.as_mut_ptr(), t);
+            _mm256_storeu_ps(out.b1.as_mut_ptr(), _mm256_mul_ps(v, inv_det));
+            _mm256_storeu_ps(out.b2.as_mut_ptr(), _mm256_mul_ps(w, inv_det));
+        }
+        out
+    }
 }
 
-/// Traverses `bvh` front to back for `ray`, calling `test(prim, t_max)` for every primitive
-/// (index into the BVH's primitive order) whose leaf the ray reaches; `test` returns the hit
-/// distance if it is closer than `t_max`. With `any_hit` traversal stops at the first hit.
-/// Returns the closest (or first) hit's primitive and distance.
+/// Traverses `bvh` front to back for `ray`. For each node reached, `leaves(base, mask, t_max)`
+/// is called with the primitives of the node's leaf children that the ray's box test passed
+/// (bit i of `mask` is primitive `base + i`, at most 24, in the BVH's primitive order); it
+/// returns the closest of them hit before `t_max` (with `any_hit`, any of them). With
+/// `any_hit` traversal stops at the first hit. Returns the closest (or first) hit's primitive
+/// and distance.
 #[inline(always)]
 pub fn traverse<F>(
     bvh: &CwBvh,
     ray: &NodeRay,
     t_max: f32,
     any_hit: bool,
-    mut test: F,
+    mut leaves: F,
 ) -> Option<(u32, f32)>
 where
-    F: FnMut(u32, f32) -> Option<f32>,
+    F: FnMut(u32, u32, f32) -> Option<(u32, f32)>,
 {
     if bvh.nodes.is_empty() {
         return None;
     }
     let mut t_max = t_max;
     let mut best = None;
-    let mut stack = [UVec2::ZERO; STACK_SIZE];
+    let mut stack = std::mem::MaybeUninit::<[UVec2; STACK_SIZE]>::uninit();
+    let stack = stack.as_mut_ptr() as *mut UVec2;
     let mut sp = 0usize;
     // (child base index, hit bits in the high byte | imask); the root is inner child 0.
     let mut node_group = UVec2::new(0, 0x8000_0000);
@@ -165,7 +263,9 @@ where
         let offset = 31 - hits.leading_zeros();
         node_group.y &= !(1u32 << offset);
         if node_group.y & 0xff00_0000 != 0 {
-            stack[sp] = node_group;
+            // SAFETY: sp < STACK_SIZE: a stack entry per level at most, and the BVH's depth
+            // was checked against STACK_SIZE when it was built (`max_depth`).
+            unsafe { stack.add(sp).write(node_group) };
             sp += 1;
         }
         let slot = (offset - 24) ^ (ray.oct_inv4 & 0xff);
@@ -178,12 +278,9 @@ where
         );
 
         // The primitives of the leaf children that were hit.
-        let (prim_base, mut prims) = (node.primitive_base_idx, mask & 0x00ff_ffff);
-        while prims != 0 {
-            let local = 31 - prims.leading_zeros();
-            prims &= !(1u32 << local);
-            let prim = prim_base + local;
-            if let Some(t) = test(prim, t_max) {
+        let prims = mask & 0x00ff_ffff;
+        if prims != 0 {
+            if let Some((prim, t)) = leaves(node.primitive_base_idx, prims, t_max) {
                 t_max = t;
                 best = Some((prim, t));
                 if any_hit {
@@ -197,8 +294,100 @@ where
                 return best;
             }
             sp -= 1;
-            node_group = stack[sp];
+            // SAFETY: every entry below sp was written above.
+            node_group = unsafe { stack.add(sp).read() };
         }
+    }
+}
+
+/// Triangles in BVH primitive order as structure of arrays, for the test of eight at once:
+/// coordinate `axis` of vertex `k` of primitive `i` is `coords[3 * k + axis][i]`. Primitives
+/// that are not triangles, and eight entries of padding at the end (so that eight lanes can
+/// be loaded from any primitive), hold NaN, which no test accepts.
+pub struct TriangleLanes {
+    coords: [Vec<f32>; 9],
+}
+
+impl TriangleLanes {
+    pub fn new(triangles: impl ExactSizeIterator<Item = Option<[Vec3; 3]>>) -> Self {
+        let n = triangles.len() + 8;
+        let mut coords: [Vec<f32>; 9] = std::array::from_fn(|_| Vec::with_capacity(n));
+        for tri in triangles {
+            let p = tri.unwrap_or([Vec3::NAN; 3]);
+            for (i, c) in coords.iter_mut().enumerate() {
+                c.push(p[i / 3][i % 3]);
+            }
+        }
+        for c in &mut coords {
+            c.resize(n, f32::NAN);
+        }
+        Self { coords }
+    }
+}
+
+/// The result of [`intersect_triangles`] for eight primitives `base..base + 8`.
+pub struct LaneHits {
+    /// Lanes hit in (0, t_max).
+    pub hit: u32,
+    /// Lanes whose edge functions came out exactly zero in single precision: these need the
+    /// scalar test's double-precision decision and are not in `hit`.
+    pub exact: u32,
+    pub t: [f32; 8],
+    pub b1: [f32; 8],
+    pub b2: [f32; 8],
+}
+
+/// The watertight test ([`WatertightRay::intersect`], the same operations in the same order,
+/// so the same bits) of the triangles `base..base + 8` selected by the low eight bits of
+/// `lanes`.
+#[inline(always)]
+pub fn intersect_triangles(
+    tris: &TriangleLanes,
+    base: usize,
+    lanes: u32,
+    ray: &WatertightRay,
+    t_max: f32,
+) -> LaneHits {
+    debug_assert!(base + 8 <= tris.coords[0].len());
+    #[cfg(all(
+        target_arch = "x86_64",
+        target_feature = "avx2",
+        target_feature = "fma"
+    ))]
+    {
+        // SAFETY: AVX2 is available (compile-time check above); base + 8 is within the
+        // padded arrays (every primitive index is below their length − 8).
+        unsafe { avx2::intersect_triangles(tris, base, lanes, ray, t_max) }
+    }
+    #[cfg(not(all(
+        target_arch = "x86_64",
+        target_feature = "avx2",
+        target_feature = "fma"
+    )))]
+    {
+        let mut out = LaneHits {
+            hit: 0,
+            exact: 0,
+            t: [0.0; 8],
+            b1: [0.0; 8],
+            b2: [0.0; 8],
+        };
+        for lane in 0..8 {
+            if lanes & (1 << lane) == 0 {
+                continue;
+            }
+            let i = base + lane;
+            let c = &tris.coords;
+            let p = [0, 1, 2].map(|k| Vec3::new(c[3 * k][i], c[3 * k + 1][i], c[3 * k + 2][i]));
+            // The scalar test decides exact zeros itself: report them as such for parity.
+            if let Some((t, b1, b2)) = ray.intersect(&p, t_max) {
+                out.hit |= 1 << lane;
+                out.t[lane] = t;
+                out.b1[lane] = b1;
+                out.b2[lane] = b2;
+            }
+        }
+        out
     }
 }
 
@@ -217,5 +406,68 @@ pub fn max_depth(bvh: &CwBvh) -> usize {
         0
     } else {
         depth(bvh, 0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use radia_math::Ray;
+    use rand::{Rng, SeedableRng};
+    use rand_pcg::Pcg64;
+
+    /// The 8-wide test gives the scalar test's answers bit for bit, on random triangles and
+    /// on rays aimed exactly at vertices and edge midpoints (where edge functions vanish).
+    #[test]
+    fn eight_triangles_at_once_match_the_scalar_test() {
+        let mut rng = Pcg64::seed_from_u64(3);
+        let mut v = || Vec3::new(rng.random(), rng.random(), rng.random()) * 2.0 - 1.0;
+        let tris: Vec<[Vec3; 3]> = (0..64).map(|_| [v(), v(), v()]).collect();
+        let lanes = TriangleLanes::new(tris.iter().map(|t| Some(*t)));
+        let mut rng = Pcg64::seed_from_u64(4);
+        let (mut hits, mut exact) = (0, 0);
+        for i in 0..20_000 {
+            let o = Vec3::new(rng.random(), rng.random(), rng.random()) * 6.0 - 3.0;
+            let tri = &tris[rng.random_range(0..tris.len())];
+            let target = match i % 3 {
+                0 => tri[rng.random_range(0..3)],
+                1 => (tri[0] + tri[1]) * 0.5,
+                _ => Vec3::new(rng.random(), rng.random(), rng.random()) * 2.0 - 1.0,
+            };
+            let ray = Ray::new(o, (target - o).normalize(), if i % 4 == 0 { 2.0 } else { f32::INFINITY });
+            let wray = WatertightRay::new(&ray);
+            for base in (0..tris.len()).step_by(8) {
+                let lane_mask = rng.random::<u32>() | 1;
+                let h = intersect_triangles(&lanes, base, lane_mask, &wray, ray.t_max);
+                exact += h.exact.count_ones();
+                for lane in 0..8 {
+                    let want = wray.intersect(&tris[base + lane], ray.t_max);
+                    let selected = lane_mask & (1 << lane) != 0;
+                    if !selected {
+                        assert_eq!(h.hit & (1 << lane), 0);
+                        continue;
+                    }
+                    if h.exact & (1 << lane) != 0 {
+                        continue; // decided by the scalar test in double precision
+                    }
+                    let got = (h.hit & (1 << lane) != 0)
+                        .then(|| (h.t[lane], h.b1[lane], h.b2[lane]));
+                    assert_eq!(
+                        got.map(|(t, a, b)| (t.to_bits(), a.to_bits(), b.to_bits())),
+                        want.map(|(t, a, b)| (t.to_bits(), a.to_bits(), b.to_bits())),
+                        "ray {i}, triangle {}",
+                        base + lane
+                    );
+                    hits += got.is_some() as u32;
+                }
+            }
+        }
+        assert!(hits > 1000, "{hits} hits");
+        // Padding and non-triangles (NaN) never hit.
+        let nan = TriangleLanes::new([None, Some(tris[0])].into_iter());
+        let ray = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z, f32::INFINITY);
+        let h = intersect_triangles(&nan, 0, 0xff, &WatertightRay::new(&ray), f32::INFINITY);
+        assert_eq!(h.hit & !0b10, 0);
+        let _ = exact;
     }
 }
