@@ -62,6 +62,13 @@ pub trait Sampler: Sync + Send {
     fn get_1d(&self, key: PixelKey, index: u32, dim: u32) -> f32;
     /// Values `dim` and `dim + 1`, stratified together.
     fn get_2d(&self, key: PixelKey, index: u32, dim: u32) -> Vec2;
+    /// Values `4 block .. 4 block + 4` at once, for samplers that make them together (one
+    /// Sobol set): [`SampleStream`] then keeps the block instead of making it again for each
+    /// of its values. `None` (the default) for samplers that make each request on its own.
+    #[inline(always)]
+    fn get_block(&self, _key: PixelKey, _index: u32, _block: u32) -> Option<[f32; 4]> {
+        None
+    }
 }
 
 /// One pixel sample's walk through its dimensions.
@@ -70,6 +77,9 @@ pub struct SampleStream<'a, S: ?Sized> {
     key: PixelKey,
     index: u32,
     dim: u32,
+    /// The last block of [`Sampler::get_block`] (`u32::MAX` when none yet).
+    block: u32,
+    values: [f32; 4],
 }
 
 impl<'a, S: Sampler + ?Sized> SampleStream<'a, S> {
@@ -80,6 +90,8 @@ impl<'a, S: Sampler + ?Sized> SampleStream<'a, S> {
             key,
             index,
             dim: 0,
+            block: u32::MAX,
+            values: [0.0; 4],
         }
     }
 
@@ -89,18 +101,35 @@ impl<'a, S: Sampler + ?Sized> SampleStream<'a, S> {
         self.dim = dim;
     }
 
+    /// Value `dim` from the sampler's block, if it makes blocks.
+    #[inline(always)]
+    fn from_block(&mut self, dim: u32) -> Option<f32> {
+        let block = dim >> 2;
+        if block != self.block {
+            self.values = self.sampler.get_block(self.key, self.index, block)?;
+            self.block = block;
+        }
+        Some(self.values[(dim & 3) as usize])
+    }
+
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
-        let v = self.sampler.get_1d(self.key, self.index, self.dim);
+        let dim = self.dim;
         self.dim += 1;
-        v
+        match self.from_block(dim) {
+            Some(v) => v,
+            None => self.sampler.get_1d(self.key, self.index, dim),
+        }
     }
 
     #[inline]
     pub fn next_2d(&mut self) -> Vec2 {
-        let v = self.sampler.get_2d(self.key, self.index, self.dim);
+        let dim = self.dim;
         self.dim += 2;
-        v
+        match self.from_block(dim) {
+            Some(x) => Vec2::new(x, self.from_block(dim + 1).unwrap_or(0.0)),
+            None => self.sampler.get_2d(self.key, self.index, dim),
+        }
     }
 }
 

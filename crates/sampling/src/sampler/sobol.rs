@@ -57,6 +57,11 @@ impl Sampler for SobolSampler {
         Self::block(key, index, dim)[(dim & 3) as usize]
     }
 
+    #[inline(always)]
+    fn get_block(&self, key: PixelKey, index: u32, block: u32) -> Option<[f32; 4]> {
+        Some(Self::block(key, index, block << 2))
+    }
+
     #[inline]
     fn get_2d(&self, key: PixelKey, index: u32, dim: u32) -> Vec2 {
         let v = Self::block(key, index, dim);
