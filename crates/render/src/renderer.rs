@@ -11,7 +11,16 @@ use radia_scene::Scene;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
-const TILE: u32 = 32;
+/// Tile edge in pixels: the largest of 32, 16, 8 that still cuts the image into at least
+/// [`MIN_TILES`] tiles, so that both cores stay busy to the end of every pass even on small
+/// images (a function of the resolution only: the image never depends on the thread count).
+fn tile_size(w: u32, h: u32) -> u32 {
+    [32, 16]
+        .into_iter()
+        .find(|t| w.div_ceil(*t) * h.div_ceil(*t) >= MIN_TILES)
+        .unwrap_or(8)
+}
+const MIN_TILES: u32 = 64;
 /// Samples per pixel in one pass (the granularity at which an interrupted render stops).
 const PASS_SPP: u32 = 16;
 
@@ -73,8 +82,9 @@ fn render_with<S: Sampler>(
     let mut film = Film::new(0, 0, w, h, filter);
     let mut stats = RenderStats::default();
 
-    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
-        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
+    let tile = tile_size(w, h);
+    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(tile))
+        .flat_map(|ty| (0..w.div_ceil(tile)).map(move |tx| (tx * tile, ty * tile)))
         .collect();
     let done = AtomicU64::new(0);
 
@@ -87,8 +97,8 @@ fn render_with<S: Sampler>(
                 if cancel.load(Ordering::Relaxed) {
                     return None;
                 }
-                let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
-                let mut tile = Film::new(
+                let (tw, th) = (tile.min(w - x0), tile.min(h - y0));
+                let mut tile_film = Film::new(
                     x0 as i32 - margin,
                     y0 as i32 - margin,
                     tw + 2 * margin as u32,
@@ -108,7 +118,7 @@ fn render_with<S: Sampler>(
                             let ray = scene.camera.generate_ray(film_pos);
                             let l = integrator.li(scene, ray, &mut stream, &mut pstats);
                             if l.is_finite() {
-                                tile.add_sample(pos, l);
+                                tile_film.add_sample(pos, l);
                             } else {
                                 invalid += 1;
                             }
@@ -121,7 +131,7 @@ fn render_with<S: Sampler>(
                 let n = (tw * th * (spp_end - spp_start)) as u64;
                 progress(done.fetch_add(n, Ordering::Relaxed) + n);
                 Some(TileResult {
-                    film: tile,
+                    film: tile_film,
                     stats: pstats,
                     invalid,
                 })
