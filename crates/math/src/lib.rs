@@ -6,6 +6,7 @@ pub use glam::{self, Affine3A, Mat3, Mat4, UVec2, Vec2, Vec3, Vec3A, Vec4};
 
 mod frame;
 mod ray;
+pub mod trig;
 
 pub use frame::Frame;
 pub use ray::Ray;
@@ -34,7 +35,7 @@ pub fn safe_sqrt(x: f32) -> f32 {
 /// `acos` clamped to [-1, 1].
 #[inline]
 pub fn safe_acos(x: f32) -> f32 {
-    x.clamp(-1.0, 1.0).acos()
+    trig::acos(x.clamp(-1.0, 1.0))
 }
 
 /// An orthonormal basis (s, t) completing the unit vector `n` (Duff et al. 2017, as Mitsuba's

@@ -197,7 +197,7 @@ impl Envmap {
     /// Bilinear lookup in the emitter's frame (see the module docs).
     fn eval_local(&self, d: Vec3) -> Spectrum {
         let (w, h) = (self.width, self.height);
-        let mut u = d.x.atan2(-d.z) * INV_TWO_PI;
+        let mut u = radia_math::trig::atan2(d.x, -d.z) * INV_TWO_PI;
         u -= u.floor();
         let v = safe_acos(d.y) * INV_PI;
         let x = u * w as f32 - 0.5;
@@ -261,7 +261,7 @@ impl Envmap {
     #[inline]
     fn cell_of(&self, d: Vec3) -> (usize, usize, Vec2) {
         let w = self.width;
-        let mut u = d.x.atan2(-d.z) * INV_TWO_PI;
+        let mut u = radia_math::trig::atan2(d.x, -d.z) * INV_TWO_PI;
         u -= u.floor();
         let x = u * w as f32 - 0.5;
         let x0 = x.floor();
