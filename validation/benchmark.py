@@ -270,6 +270,10 @@ def measure_radia(scene, res, spp, sampler, binary, label, threads, ref, repeats
     """One radia binary and sampler: `repeats` processes with distinct seeds."""
     r = RadiaRenderer(scene, res, spp, binary=binary, threads=threads, sampler=sampler,
                       rfilter="box", extra_defines=defines)
+    # One untimed render first: the first process after Mitsuba's renders ran up to a third
+    # slower (page cache, CPU frequency), which the median of three did not always hide.
+    r.render(seed=0, spp=min(spp, 16))
+    r.infos.clear()
     rels = []
     for k in range(repeats):
         img = r.render(seed=1 + k, spp=spp)

@@ -17,7 +17,7 @@
 //! | `multijitter` | correlated multi-jittered 2D points (Kensler 2013) | a near-square rectangle |
 //! | `orthogonal` | orthogonal-array sampling (Jarosz et al. 2019) | the square of a prime |
 //! | `ldsampler` | scrambled (0, 2)-sequence points | a power-of-two square |
-//! | `sobol` (radia) | Owen-scrambled Sobol (Burley 2020), 4D sets with per-set shuffles | as given |
+//! | `sobol` (radia) | one Owen-scrambled Sobol sequence over all dimensions (Burley 2020), its order shuffled per pixel | as given |
 //!
 //! # Dimension layout
 //! Dimensions are numbered by value: a 2D request at `dim` uses values `dim` and `dim + 1`.
