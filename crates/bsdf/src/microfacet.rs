@@ -192,16 +192,56 @@ impl MicrofacetDistribution {
         let wi_p = Vec3::new(au * wi.x, av * wi.y, wi.z).normalize();
         let (sin_phi, cos_phi) = sincos_phi(wi_p);
         let slope = self.sample_visible_11(wi_p.z, u);
-        let slope = Vec2::new(
-            (cos_phi * slope.x - sin_phi * slope.y) * au,
-            (sin_phi * slope.x + cos_phi * slope.y) * av,
-        );
-        let m = Vec3::new(-slope.x, -slope.y, 1.0).normalize();
-        if !m.is_finite() {
+        let Some(m) = self.unstretch(sin_phi, cos_phi, slope) else {
             return (Vec3::Z, 0.0);
-        }
+        };
         let pdf = self.eval(m) * self.visible_g1(wi, m) * wi.dot(m).abs() / wi.z;
         (m, pdf)
+    }
+
+    /// The normal of the α = 1 slopes `slope`, rotated to wi's azimuth (φ given by its sine
+    /// and cosine) and unstretched; `None` if it is not finite.
+    #[inline]
+    fn unstretch(&self, sin_phi: f32, cos_phi: f32, slope: Vec2) -> Option<Vec3> {
+        let slope = Vec2::new(
+            (cos_phi * slope.x - sin_phi * slope.y) * self.alpha_u,
+            (sin_phi * slope.x + cos_phi * slope.y) * self.alpha_v,
+        );
+        let m = Vec3::new(-slope.x, -slope.y, 1.0).normalize();
+        m.is_finite().then_some(m)
+    }
+
+    /// Calls `f(i, j, m)` with the normal `m` that [`Self::sample`] gives for
+    /// `(xs[i], ys[j])`, for every pair, row by row: the grid of a quadrature over visible
+    /// normals. The same normals bit for bit, but Beckmann's visible slopes are separable
+    /// (x from u.x by a Newton inversion, y Gaussian from u.y), so each is made once per
+    /// coordinate instead of once per pair: the rough plastic's tables at load take 10⁶ such
+    /// normals.
+    pub fn visible_normals_grid(
+        &self,
+        wi: Vec3,
+        xs: &[f32],
+        ys: &[f32],
+        mut f: impl FnMut(usize, usize, Vec3),
+    ) {
+        if !(self.sample_visible && self.kind == MicrofacetType::Beckmann) {
+            for (i, &x) in xs.iter().enumerate() {
+                for (j, &y) in ys.iter().enumerate() {
+                    f(i, j, self.sample(wi, Vec2::new(x, y)).0);
+                }
+            }
+            return;
+        }
+        let wi_p = Vec3::new(self.alpha_u * wi.x, self.alpha_v * wi.y, wi.z).normalize();
+        let (sin_phi, cos_phi) = sincos_phi(wi_p);
+        let slopes_y: Vec<f32> = ys.iter().map(|&y| beckmann_slope_y(y)).collect();
+        for (i, &x) in xs.iter().enumerate() {
+            let slope_x = beckmann_slope_x(wi_p.z, x);
+            for (j, &slope_y) in slopes_y.iter().enumerate() {
+                let m = self.unstretch(sin_phi, cos_phi, Vec2::new(slope_x, slope_y));
+                f(i, j, m.unwrap_or(Vec3::Z));
+            }
+        }
     }
 
     /// Slopes of the visible normals of the α = 1 distribution seen under cos θ_i.
@@ -303,25 +343,36 @@ fn sincos_phi(v: Vec3) -> (f32, f32) {
 /// `sample_visible_11`: the x slope inverts the visible-slope CDF numerically in the erf
 /// domain from an analytic initial guess with three Newton steps, the y slope is Gaussian.
 fn beckmann_visible_slopes_11(cos_theta_i: f32, u: Vec2) -> Vec2 {
+    Vec2::new(beckmann_slope_x(cos_theta_i, u.x), beckmann_slope_y(u.y))
+}
+
+/// The x slope of [`beckmann_visible_slopes_11`].
+#[inline]
+fn beckmann_slope_x(cos_theta_i: f32, u: f32) -> f32 {
     const INV_SQRT_PI: f32 = 0.564_189_6;
     let tan_theta_i = safe_sqrt(1.0 - cos_theta_i * cos_theta_i) / cos_theta_i;
     let cot_theta_i = 1.0 / tan_theta_i;
 
     // Search interval: everything is parameterized in the erf() domain.
     let maxval = erf(cot_theta_i);
-    let u = u.clamp(Vec2::splat(1e-6), Vec2::splat(1.0 - 1e-6));
+    let u = u.clamp(1e-6, 1.0 - 1e-6);
     // Initial guess: the analytic solution for θ_i = π/2, the most nonlinear case.
-    let mut x = maxval - (maxval + 1.0) * erf((-u.x.ln()).sqrt());
+    let mut x = maxval - (maxval + 1.0) * erf((-u.ln()).sqrt());
     // Normalization of the CDF.
-    let target =
-        u.x * (1.0 + maxval + INV_SQRT_PI * tan_theta_i * (-cot_theta_i * cot_theta_i).exp());
+    let target = u * (1.0 + maxval + INV_SQRT_PI * tan_theta_i * (-cot_theta_i * cot_theta_i).exp());
     for _ in 0..3 {
         let slope = erfinv(x);
         let value = 1.0 + x + INV_SQRT_PI * tan_theta_i * (-slope * slope).exp() - target;
         let derivative = 1.0 - slope * tan_theta_i;
         x -= value / derivative;
     }
-    Vec2::new(erfinv(x), erfinv(2.0 * u.y - 1.0))
+    erfinv(x)
+}
+
+/// The y slope of [`beckmann_visible_slopes_11`]: Gaussian.
+#[inline]
+fn beckmann_slope_y(u: f32) -> f32 {
+    erfinv(2.0 * u.clamp(1e-6, 1.0 - 1e-6) - 1.0)
 }
 
 /// The error function: Abramowitz and Stegun's 7.1.26 (absolute error below 1.5·10⁻⁷).

@@ -123,17 +123,14 @@ fn quadrature_over_visible_normals(
 ) -> f32 {
     let res = if eta > 1.0 { 32 } else { 128 };
     let (nodes, weights) = gauss_legendre(res);
+    let u: Vec<f32> = nodes.iter().map(|x| (x * 0.5 + 0.5) as f32).collect();
     let mut sum = 0.0f64;
-    for (x, wx) in nodes.iter().zip(&weights) {
-        for (y, wy) in nodes.iter().zip(&weights) {
-            let u = Vec2::new((x * 0.5 + 0.5) as f32, (y * 0.5 + 0.5) as f32);
-            let (m, _) = d.sample(wi, u);
-            let v = f(m, wi);
-            if v.is_finite() {
-                sum += v as f64 * wx * wy * 0.25;
-            }
+    d.visible_normals_grid(wi, &u, &u, |i, j, m| {
+        let v = f(m, wi);
+        if v.is_finite() {
+            sum += v as f64 * weights[i] * weights[j] * 0.25;
         }
-    }
+    });
     sum as f32
 }
 
