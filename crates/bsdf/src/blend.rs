@@ -19,7 +19,7 @@
 //! probability of choosing it, (1 − w) or w times its pdf: unbiased. Blends of smooth
 //! models behave exactly as Mitsuba's.
 
-use crate::{Bsdf, BsdfSample, LobeFlags, ShadingPoint};
+use crate::{Bsdf, BsdfSample, LobeFlags, ShadingPoint, Texture};
 use glam::{Vec2, Vec3};
 use radia_math::Spectrum;
 
@@ -27,6 +27,10 @@ use radia_math::Spectrum;
 pub struct Blend {
     /// Weight of the second BSDF, in [0, 1].
     pub weight: f32,
+    /// A textured weight (Mitsuba's `weight` bound to a texture), looked up per shading
+    /// point with `eval_1` and clamped to [0, 1] (`blendbsdf.cpp`'s `eval_weight`); when
+    /// present it replaces `weight`.
+    pub weight_texture: Option<Texture>,
     pub bsdfs: Box<[Bsdf; 2]>,
 }
 
@@ -38,7 +42,35 @@ impl Blend {
             } else {
                 weight.clamp(0.0, 1.0)
             },
+            weight_texture: None,
             bsdfs: Box::new([first, second]),
+        }
+    }
+
+    /// A blend whose weight is a texture (a constant one is stored as a plain weight).
+    pub fn textured(weight: Texture, first: Bsdf, second: Bsdf) -> Self {
+        match weight.as_constant() {
+            Some(_) => Self::new(weight.eval_1(&ShadingPoint::default()), first, second),
+            None => Self {
+                weight_texture: Some(weight),
+                ..Self::new(0.0, first, second)
+            },
+        }
+    }
+
+    /// The weight at `sp`.
+    #[inline]
+    fn weight_at(&self, sp: &ShadingPoint) -> f32 {
+        match &self.weight_texture {
+            None => self.weight,
+            Some(t) => {
+                let w = t.eval_1(sp);
+                if w.is_nan() {
+                    0.0
+                } else {
+                    w.clamp(0.0, 1.0)
+                }
+            }
         }
     }
 
@@ -48,7 +80,7 @@ impl Blend {
 
     #[inline]
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
-        let w = self.weight;
+        let w = self.weight_at(sp);
         let mut f = Spectrum::ZERO;
         if w < 1.0 {
             f += self.bsdfs[0].eval(sp, wi, wo) * (1.0 - w);
@@ -61,7 +93,7 @@ impl Blend {
 
     #[inline]
     pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        let w = self.weight;
+        let w = self.weight_at(sp);
         let mut p = 0.0;
         if w < 1.0 {
             p += self.bsdfs[0].pdf(sp, wi, wo) * (1.0 - w);
@@ -74,7 +106,7 @@ impl Blend {
 
     #[inline]
     pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
-        let w = self.weight;
+        let w = self.weight_at(sp);
         // Mitsuba: the second BSDF when u1 ≤ w, the first when u1 > w.
         let (chosen, other, u1, p_chosen) = if w >= 1.0 || (w > 0.0 && u1 <= w) {
             (1, 0, (u1 / w).min(1.0), w)

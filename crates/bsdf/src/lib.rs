@@ -78,7 +78,10 @@ pub use plastic::Plastic;
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
 pub use rough_plastic::RoughPlastic;
-pub use texture::Texture;
+pub use texture::{
+    decode_8bit, srgb_to_linear, Bitmap, BitmapError, Checkerboard, FilterType, Texture, UvTransform,
+    WrapMode,
+};
 pub use thin_dielectric::ThinDielectric;
 pub use twosided::TwoSided;
 
@@ -131,10 +134,30 @@ impl std::ops::BitOr for LobeFlags {
     }
 }
 
-/// Where on the surface a BSDF is queried: what textures need.
+/// Where on the surface a BSDF is queried: what textures and the normal/bump-map adapters
+/// need. Vectors are in the **local shading frame**, like the BSDF's directions.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ShadingPoint {
+    /// Surface texture coordinates (Mitsuba's `si.uv`).
     pub uv: Vec2,
+    /// ∂p/∂u and ∂p/∂v of the surface parametrisation (Mitsuba's `si.dp_du`, `si.dp_dv`).
+    pub dp_du: Vec3,
+    pub dp_dv: Vec3,
+    /// The geometric normal (Mitsuba's `si.n`); +z when it agrees with the shading normal.
+    pub n: Vec3,
+}
+
+impl ShadingPoint {
+    /// A point at `uv` on a flat surface whose parametrisation follows the shading frame
+    /// (∂p/∂u = s, ∂p/∂v = t, geometric normal = shading normal): for tests and tools.
+    pub const fn at_uv(uv: Vec2) -> Self {
+        Self {
+            uv,
+            dp_du: Vec3::X,
+            dp_dv: Vec3::Y,
+            n: Vec3::Z,
+        }
+    }
 }
 
 /// The result of [`Bsdf::sample`].

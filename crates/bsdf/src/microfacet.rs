@@ -50,6 +50,15 @@ pub struct MicrofacetDistribution {
     pub sample_visible: bool,
 }
 
+/// Roughness given as textures (Mitsuba's `alpha`, or `alpha_u` and `alpha_v`, bound to a
+/// texture): the distribution at a shading point takes α_u and α_v from their `eval_1`,
+/// as `roughconductor.cpp` and `roughdielectric.cpp` build one per lookup.
+#[derive(Clone, Debug)]
+pub struct RoughnessTextures {
+    pub alpha_u: crate::Texture,
+    pub alpha_v: crate::Texture,
+}
+
 /// Mitsuba clamps roughness to this (`MicrofacetDistribution::configure`).
 pub const MIN_ALPHA: f32 = 1e-4;
 
@@ -60,6 +69,26 @@ impl MicrofacetDistribution {
             alpha_u: alpha_u.max(MIN_ALPHA),
             alpha_v: alpha_v.max(MIN_ALPHA),
             sample_visible,
+        }
+    }
+
+    /// This distribution, or with α looked up in `textures` at `sp` (kind and sampling
+    /// strategy kept, α clamped as [`MicrofacetDistribution::new`] does). Without textures
+    /// it is a copy: the constant path costs one branch.
+    #[inline]
+    pub fn at(
+        &self,
+        textures: &Option<Box<RoughnessTextures>>,
+        sp: &crate::ShadingPoint,
+    ) -> Self {
+        match textures {
+            None => *self,
+            Some(t) => Self::new(
+                self.kind,
+                t.alpha_u.eval_1(sp),
+                t.alpha_v.eval_1(sp),
+                self.sample_visible,
+            ),
         }
     }
 

@@ -17,7 +17,7 @@
 //! Jacobian of the half-vector map.
 
 use crate::fresnel::{fresnel_conductor, reflect_about};
-use crate::microfacet::{MicrofacetDistribution, Shadowing};
+use crate::microfacet::{MicrofacetDistribution, RoughnessTextures, Shadowing};
 use crate::{BsdfSample, LobeFlags, ShadingPoint, Texture};
 use glam::{Vec2, Vec3};
 use radia_math::Spectrum;
@@ -25,6 +25,8 @@ use radia_math::Spectrum;
 #[derive(Clone, Debug)]
 pub struct RoughConductor {
     pub distribution: MicrofacetDistribution,
+    /// Textured α, looked up per shading point instead of `distribution`'s.
+    pub roughness: Option<Box<RoughnessTextures>>,
     pub shadowing: Shadowing,
     pub eta: Spectrum,
     pub k: Spectrum,
@@ -131,11 +133,18 @@ impl RoughConductor {
     ) -> Self {
         Self {
             distribution,
+            roughness: None,
             shadowing: Shadowing::Separable,
             eta,
             k,
             specular_reflectance: specular_reflectance.into(),
         }
+    }
+
+    /// α from textures (Mitsuba's `alpha`/`alpha_u`/`alpha_v` bound to a texture).
+    pub fn with_roughness(mut self, roughness: Option<RoughnessTextures>) -> Self {
+        self.roughness = roughness.map(Box::new);
+        self
     }
 
     pub fn with_shadowing(mut self, shadowing: Shadowing) -> Self {
@@ -149,7 +158,8 @@ impl RoughConductor {
 
     #[inline]
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
-        match microfacet_reflection(&self.distribution, self.shadowing, wi, wo) {
+        let dist = self.distribution.at(&self.roughness, sp);
+        match microfacet_reflection(&dist, self.shadowing, wi, wo) {
             Some((v, h)) => {
                 fresnel_conductor(wi.dot(h), self.eta, self.k)
                     * self.specular_reflectance.eval(sp)
@@ -160,13 +170,14 @@ impl RoughConductor {
     }
 
     #[inline]
-    pub fn pdf(&self, _sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        microfacet_reflection_pdf(&self.distribution, wi, wo)
+    pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
+        microfacet_reflection_pdf(&self.distribution.at(&self.roughness, sp), wi, wo)
     }
 
     #[inline]
     pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, _u1: f32, u2: Vec2) -> Option<BsdfSample> {
-        let s = sample_microfacet_reflection(&self.distribution, self.shadowing, wi, u2)?;
+        let dist = self.distribution.at(&self.roughness, sp);
+        let s = sample_microfacet_reflection(&dist, self.shadowing, wi, u2)?;
         let f = fresnel_conductor(wi.dot(s.m), self.eta, self.k);
         Some(BsdfSample {
             wo: s.wo,

@@ -26,7 +26,7 @@
 //! 1.2 − 0.2 √|cos θi| for sampling, Walter's trick, as Mitsuba.
 
 use crate::fresnel::{fresnel_dielectric, reflect_about, refract_about};
-use crate::microfacet::{MicrofacetDistribution, Shadowing};
+use crate::microfacet::{MicrofacetDistribution, RoughnessTextures, Shadowing};
 use crate::{BsdfSample, LobeFlags, ShadingPoint, Texture};
 use glam::{Vec2, Vec3};
 use radia_math::Spectrum;
@@ -34,6 +34,8 @@ use radia_math::Spectrum;
 #[derive(Clone, Debug)]
 pub struct RoughDielectric {
     pub distribution: MicrofacetDistribution,
+    /// Textured α, looked up per shading point instead of `distribution`'s.
+    pub roughness: Option<Box<RoughnessTextures>>,
     /// Relative IOR, interior over exterior.
     pub eta: f32,
     inv_eta: f32,
@@ -77,10 +79,21 @@ fn half_vector(
     m.is_finite().then_some((m, eta, reflect))
 }
 
+/// The distribution normals are sampled from (Walter's widening without visible normals).
+#[inline]
+fn sampling_distribution(dist: &MicrofacetDistribution, cos_theta_i: f32) -> MicrofacetDistribution {
+    if dist.sample_visible {
+        *dist
+    } else {
+        dist.scaled(1.2 - 0.2 * cos_theta_i.abs().sqrt())
+    }
+}
+
 impl RoughDielectric {
     pub fn new(distribution: MicrofacetDistribution, int_ior: f32, ext_ior: f32) -> Self {
         Self {
             distribution,
+            roughness: None,
             eta: int_ior / ext_ior,
             inv_eta: ext_ior / int_ior,
             specular_reflectance: Spectrum::ONE.into(),
@@ -92,15 +105,10 @@ impl RoughDielectric {
         LobeFlags::GLOSSY_REFLECTION | LobeFlags::GLOSSY_TRANSMISSION
     }
 
-    /// The distribution normals are sampled from (Walter's widening without visible normals).
-    #[inline]
-    fn sampling_distribution(&self, cos_theta_i: f32) -> MicrofacetDistribution {
-        if self.distribution.sample_visible {
-            self.distribution
-        } else {
-            self.distribution
-                .scaled(1.2 - 0.2 * cos_theta_i.abs().sqrt())
-        }
+    /// α from textures (Mitsuba's `alpha`/`alpha_u`/`alpha_v` bound to a texture).
+    pub fn with_roughness(mut self, roughness: Option<RoughnessTextures>) -> Self {
+        self.roughness = roughness.map(Box::new);
+        self
     }
 
     #[inline]
@@ -108,12 +116,13 @@ impl RoughDielectric {
         let Some((m, eta, reflect)) = half_vector(self.eta, self.inv_eta, wi, wo) else {
             return Spectrum::ZERO;
         };
-        let d = self.distribution.eval(m);
+        let dist = self.distribution.at(&self.roughness, sp);
+        let d = dist.eval(m);
         if !(d > 0.0) {
             return Spectrum::ZERO;
         }
         let f = fresnel_dielectric(wi.dot(m), self.eta).f;
-        let g = self.distribution.g(wi, wo, m, Shadowing::Separable);
+        let g = dist.g(wi, wo, m, Shadowing::Separable);
         if !(g > 0.0) {
             return Spectrum::ZERO;
         }
@@ -138,7 +147,7 @@ impl RoughDielectric {
     }
 
     #[inline]
-    pub fn pdf(&self, _sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
+    pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
         let Some((m, eta, reflect)) = half_vector(self.eta, self.inv_eta, wi, wo) else {
             return 0.0;
         };
@@ -153,7 +162,8 @@ impl RoughDielectric {
             let denom = dot_i + eta * dot_o;
             eta * eta * dot_o / (denom * denom)
         };
-        let mut prob = self.sampling_distribution(wi.z).pdf(mulsign(wi, wi.z), m);
+        let dist = self.distribution.at(&self.roughness, sp);
+        let mut prob = sampling_distribution(&dist, wi.z).pdf(mulsign(wi, wi.z), m);
         let f = fresnel_dielectric(dot_i, self.eta).f;
         prob *= if reflect { f } else { 1.0 - f };
         let p = prob * dwh_dwo.abs();
@@ -170,7 +180,8 @@ impl RoughDielectric {
         if cos_i == 0.0 || !wi.is_finite() {
             return None;
         }
-        let sampling = self.sampling_distribution(cos_i);
+        let dist = self.distribution.at(&self.roughness, sp);
+        let sampling = sampling_distribution(&dist, cos_i);
         let (m, pdf_m) = sampling.sample(mulsign(wi, cos_i), u2);
         if !(pdf_m > 0.0) {
             return None;
@@ -197,11 +208,11 @@ impl RoughDielectric {
             let denom = wi.dot(m) + eta * wo.dot(m);
             dwh_dwo = eta * eta * wo.dot(m) / (denom * denom);
         }
-        let g = if self.distribution.sample_visible {
+        let g = if dist.sample_visible {
             // G/G1(wi) with the exact G1 of the visible-normal density: Mitsuba's G1(wo) for
             // GGX (see `MicrofacetDistribution::visible_g1` for Beckmann).
-            self.distribution.g(wi, wo, m, Shadowing::Separable)
-                / self.distribution.visible_g1(mulsign(wi, cos_i), m)
+            dist.g(wi, wo, m, Shadowing::Separable)
+                / dist.visible_g1(mulsign(wi, cos_i), m)
         } else {
             // Walter et al.'s weight G (wi·m)/(cos θi cos θm) assumes normals drawn from D
             // itself; with the widened sampling distribution D' it needs D(m)/D'(m) too.
@@ -209,8 +220,8 @@ impl RoughDielectric {
             // contributions follow the lobe of the widened roughness (per direction off by
             // D/D', about 6% at the lobe's centre for cos θi = 0.7; the total albedo barely
             // changes). radia keeps weight = eval/pdf.
-            self.distribution.g(wi, wo, m, Shadowing::Separable) * wi.dot(m) / (cos_i * m.z)
-                * (self.distribution.eval(m) / sampling.eval(m))
+            dist.g(wi, wo, m, Shadowing::Separable) * wi.dot(m) / (cos_i * m.z)
+                * (dist.eval(m) / sampling.eval(m))
         };
         weight *= g;
         let pdf = pdf_m * lobe_prob * dwh_dwo.abs();

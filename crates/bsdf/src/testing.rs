@@ -32,7 +32,7 @@ pub fn suite_alpha() -> f64 {
     chi2::sidak_alpha(chi2::DEFAULT_ALPHA, CHI2_SUITE_SIZE)
 }
 
-pub const SP: ShadingPoint = ShadingPoint { uv: Vec2::ZERO };
+pub const SP: ShadingPoint = ShadingPoint::at_uv(Vec2::ZERO);
 
 /// The unit direction with cosine `cos_theta` to +z and azimuth `phi`.
 pub fn dir(cos_theta: f32, phi: f32) -> Vec3 {

@@ -134,7 +134,7 @@ impl PathIntegrator {
             }
 
             let bsdf = scene.bsdf(&si);
-            let sp = ShadingPoint { uv: si.uv };
+            let sp = si.shading_point();
 
             // ---- Emitter sampling (next-event estimation) ----
             if bsdf.flags().has_smooth() && self.has_lights {

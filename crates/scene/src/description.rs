@@ -2,7 +2,7 @@
 //! [`crate::Scene::build`] consumes. Plain data in world space; no strings left to compare.
 
 use glam::{Affine3A, Vec2, Vec3};
-use radia_bsdf::Bsdf;
+use radia_bsdf::{Bsdf, Texture};
 use radia_math::Spectrum;
 use radia_sampling::SamplerKind;
 
@@ -126,8 +126,9 @@ pub enum Geometry {
 pub struct ShapeDesc {
     pub geometry: Geometry,
     pub bsdf: Bsdf,
-    /// Radiance of the one-sided `area` emitter attached to the shape.
-    pub emission: Option<Spectrum>,
+    /// Radiance of the one-sided `area` emitter attached to the shape (a constant or a
+    /// texture over the shape's uv).
+    pub emission: Option<Texture>,
     /// Where the shape was declared (for messages): "file:line".
     pub origin: String,
 }

@@ -19,7 +19,7 @@ pub use loader::{load_mitsuba_xml, LoadError};
 pub use shape::{Shape, SurfaceInteraction};
 
 use glam::Vec3;
-use radia_bsdf::Bsdf;
+use radia_bsdf::{Bsdf, ShadingPoint};
 use radia_math::Ray;
 
 /// Ray offsets as Mitsuba's `Interaction::offset_p` (`include/mitsuba/render/interaction.h`):
@@ -135,6 +135,18 @@ pub fn offset_origin(p: Vec3, n: Vec3, d: Vec3) -> Vec3 {
 }
 
 impl SurfaceInteraction {
+    /// What the BSDF and its textures see of this point: uv, and the parametrisation's
+    /// tangents and the geometric normal in the local shading frame.
+    #[inline]
+    pub fn shading_point(&self) -> ShadingPoint {
+        ShadingPoint {
+            uv: self.uv,
+            dp_du: self.frame.to_local(self.dp_du),
+            dp_dv: self.frame.to_local(self.dp_dv),
+            n: self.frame.to_local(self.n),
+        }
+    }
+
     /// A ray leaving the surface in the world-space direction `d`.
     #[inline]
     pub fn spawn_ray(&self, d: Vec3) -> Ray {

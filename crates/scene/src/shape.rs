@@ -45,6 +45,10 @@ pub struct SurfaceInteraction {
     /// Shading frame; its `n` is the interpolated shading normal.
     pub frame: Frame,
     pub uv: Vec2,
+    /// ∂p/∂u and ∂p/∂v in world space (Mitsuba's `si.dp_du`, `si.dp_dv`): the tangents of
+    /// the uv parametrisation, which bump mapping perturbs.
+    pub dp_du: Vec3,
+    pub dp_dv: Vec3,
     pub shape: u32,
     /// Triangle index within a mesh (0 on analytic shapes): which light primitive of an
     /// emitting shape was hit.
@@ -132,7 +136,7 @@ impl Shape {
         d: Vec3,
     ) -> SurfaceInteraction {
         let mut face = 0;
-        let (p, n, sh_n, dpdu, uv) = match (&self.kind, prim) {
+        let (p, n, sh_n, dpdu, dpdv, uv) = match (&self.kind, prim) {
             (ShapeKind::Mesh(mesh), Primitive::Triangle { p: v, face: f, .. }) => {
                 face = *f;
                 let idx = mesh.indices[face as usize];
@@ -141,7 +145,8 @@ impl Shape {
                 let p = v[0] * b0 + v[1] * b1 + v[2] * b2;
                 let dp0 = v[1] - v[0];
                 let dp1 = v[2] - v[0];
-                let mut n = dp0.cross(dp1).normalize();
+                let n_face = dp0.cross(dp1).normalize();
+                let mut n = n_face;
                 let mut sh_n = match &mesh.normals {
                     Some(ns) => {
                         let s = ns[idx[0] as usize] * b0
@@ -160,24 +165,31 @@ impl Shape {
                     n = -n;
                     sh_n = -sh_n;
                 }
-                // dp/du from the triangle's uv mapping, as Mitsuba's mesh.cpp.
-                let (uv, dpdu) = match &mesh.uvs {
+                // dp/du and dp/dv from the triangle's uv mapping, as Mitsuba's
+                // `src/render/mesh.cpp`: barycentric without texture coordinates, an
+                // arbitrary basis around the (unflipped) face normal when the uv triangle
+                // is degenerate.
+                let (uv, dpdu, dpdv) = match &mesh.uvs {
                     Some(uvs) => {
                         let t = idx.map(|i| uvs[i as usize]);
                         let uv = t[0] * b0 + t[1] * b1 + t[2] * b2;
                         let duv0 = t[1] - t[0];
                         let duv1 = t[2] - t[0];
                         let det = duv0.x * duv1.y - duv0.y * duv1.x;
-                        let dpdu = if det != 0.0 {
-                            (dp0 * duv1.y - dp1 * duv0.y) / det
+                        let (dpdu, dpdv) = if det != 0.0 {
+                            let inv = 1.0 / det;
+                            (
+                                (dp0 * duv1.y - dp1 * duv0.y) * inv,
+                                (dp1 * duv0.x - dp0 * duv1.x) * inv,
+                            )
                         } else {
-                            Vec3::ZERO
+                            radia_math::coordinate_system(n_face)
                         };
-                        (uv, dpdu)
+                        (uv, dpdu, dpdv)
                     }
-                    None => (Vec2::new(b1, b2), dp0),
+                    None => (Vec2::new(b1, b2), dp0, dp1),
                 };
-                (p, n, sh_n, dpdu, uv)
+                (p, n, sh_n, dpdu, dpdv, uv)
             }
             (
                 ShapeKind::Sphere {
@@ -199,10 +211,18 @@ impl Shape {
                 }
                 let v = radia_math::safe_acos(n.z) / PI;
                 let dpdu = Vec3::new(-local.y, local.x, 0.0) * (2.0 * PI);
+                // Mitsuba's sphere.cpp: dp/dv = (z cos φ, z sin φ, −r sin θ) · π.
+                let rxy = (local.x * local.x + local.y * local.y).sqrt();
+                let (cos_phi, sin_phi) = if rxy > 0.0 {
+                    (local.x / rxy, local.y / rxy)
+                } else {
+                    (1.0, 0.0)
+                };
+                let dpdv = Vec3::new(local.z * cos_phi, local.z * sin_phi, -rxy) * PI;
                 if *flip_normals {
                     n = -n;
                 }
-                (p, n, n, dpdu, Vec2::new(u, v))
+                (p, n, n, dpdu, dpdv, Vec2::new(u, v))
             }
             (
                 ShapeKind::Disk {
@@ -227,8 +247,11 @@ impl Shape {
                     (1.0, 0.0)
                 };
                 let dpdu = to_world.transform_vector3(Vec3::new(c, s, 0.0));
+                // Mitsuba's disk.cpp: dp/dv = (−y, x, 0) · 2π in local coordinates.
+                let dpdv =
+                    to_world.transform_vector3(Vec3::new(-local.y, local.x, 0.0) * (2.0 * PI));
                 let n = if *flip_normals { -*normal } else { *normal };
-                (p, n, n, dpdu, Vec2::new(r, v))
+                (p, n, n, dpdu, dpdv, Vec2::new(r, v))
             }
             _ => unreachable!("primitive and shape kinds always agree"),
         };
@@ -239,9 +262,55 @@ impl Shape {
             n,
             frame,
             uv,
+            dp_du: dpdu,
+            dp_dv: dpdv,
             shape: prim.shape(),
             face,
             wi: frame.to_local(-d),
+        }
+    }
+
+    /// The uv of point `p` on light primitive `face` (for textured emitters: the same uv a
+    /// ray hitting `p` finds).
+    pub fn uv_at(&self, face: u32, p: Vec3) -> Vec2 {
+        match &self.kind {
+            ShapeKind::Mesh(mesh) => {
+                let v = mesh_triangle(mesh, face);
+                // Barycentrics of p by areas (p lies in the triangle's plane).
+                let (e1, e2, ep) = (v[1] - v[0], v[2] - v[0], p - v[0]);
+                let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+                let (dp1, dp2) = (ep.dot(e1), ep.dot(e2));
+                let det = d11 * d22 - d12 * d12;
+                let (b1, b2) = if det != 0.0 {
+                    ((d22 * dp1 - d12 * dp2) / det, (d11 * dp2 - d12 * dp1) / det)
+                } else {
+                    (0.0, 0.0)
+                };
+                match &mesh.uvs {
+                    Some(uvs) => {
+                        let t = mesh.indices[face as usize].map(|i| uvs[i as usize]);
+                        t[0] * (1.0 - b1 - b2) + t[1] * b1 + t[2] * b2
+                    }
+                    None => Vec2::new(b1, b2),
+                }
+            }
+            ShapeKind::Sphere { center, .. } => {
+                let local = (p - *center).normalize();
+                let mut u = local.y.atan2(local.x) * INV_TWO_PI;
+                if u < 0.0 {
+                    u += 1.0;
+                }
+                Vec2::new(u, radia_math::safe_acos(local.z) / PI)
+            }
+            ShapeKind::Disk { to_local, .. } => {
+                let local = to_local.transform_point3(p);
+                let r = (local.x * local.x + local.y * local.y).sqrt();
+                let mut v = local.y.atan2(local.x) * INV_TWO_PI;
+                if v < 0.0 {
+                    v += 1.0;
+                }
+                Vec2::new(r, v)
+            }
         }
     }
 

@@ -41,7 +41,7 @@ fn emitting(geometry: Geometry, radiance: Vec3) -> ShapeDesc {
     ShapeDesc {
         geometry,
         bsdf: Bsdf::Diffuse(Diffuse::new(Vec3::ZERO)),
-        emission: Some(radiance),
+        emission: Some(radiance.into()),
         origin: "test".into(),
     }
 }

@@ -9,17 +9,18 @@
 
 use super::build::Builder;
 use super::props::Props;
+use super::textures::{is_texture, texture_param};
 use super::xml::{Kind, Value};
 use super::LoadError;
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use radia_bsdf::ior::{
     lookup_conductor, lookup_dielectric_ior, CONDUCTOR_PRESETS, DIELECTRIC_IORS,
 };
-use radia_bsdf::microfacet::Shadowing;
+use radia_bsdf::microfacet::{RoughnessTextures, Shadowing};
 use radia_bsdf::{
     Blend, BlinnPhong, Bsdf, Conductor, CookTorrance, CookTorranceFresnel, Dielectric, Diffuse,
     LobeFlags, MicrofacetDistribution, MicrofacetType, Phong, Plastic, RoughConductor,
-    RoughDielectric, RoughPlastic, ThinDielectric, TwoSided,
+    RoughDielectric, RoughPlastic, Texture, ThinDielectric, TwoSided,
 };
 
 /// Nested BSDFs (twosided of twosided ...) deeper than this are refused.
@@ -46,19 +47,19 @@ pub(crate) fn build_bsdf(
         )));
     }
     let bsdf = match p.node.plugin.as_str() {
-        "diffuse" => diffuse(p)?,
-        "conductor" => conductor(p)?,
-        "roughconductor" => rough_conductor(p)?,
-        "dielectric" => dielectric(p)?,
-        "thindielectric" => thin_dielectric(p)?,
-        "roughdielectric" => rough_dielectric(p)?,
-        "plastic" => plastic(p)?,
-        "roughplastic" => rough_plastic(p)?,
+        "diffuse" => diffuse(b, p)?,
+        "conductor" => conductor(b, p)?,
+        "roughconductor" => rough_conductor(b, p)?,
+        "dielectric" => dielectric(b, p)?,
+        "thindielectric" => thin_dielectric(b, p)?,
+        "roughdielectric" => rough_dielectric(b, p)?,
+        "plastic" => plastic(b, p)?,
+        "roughplastic" => rough_plastic(b, p)?,
         "blendbsdf" => blend(b, p, nesting)?,
         "twosided" => twosided(b, p, nesting)?,
         "phong" => phong(b, p, false)?,
         "blinnphong" => phong(b, p, true)?,
-        "cooktorrance" => cook_torrance(p)?,
+        "cooktorrance" => cook_torrance(b, p)?,
         other => {
             return Err(p.err(format!(
                 "unsupported BSDF plugin type \"{other}\" (radia supports: {SUPPORTED})"
@@ -77,10 +78,10 @@ pub(crate) fn default_bsdf(is_emitter: bool) -> Bsdf {
 }
 
 /// `diffuse` (`src/bsdfs/diffuse.cpp`): `reflectance`, default 0.5.
-fn diffuse(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
-    let r = p.color("reflectance", 0.5, true)?;
+fn diffuse(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+    let r = texture_param(b, &mut p, "reflectance", 0.5, true)?;
     p.finish()?;
-    Ok(Bsdf::Diffuse(Diffuse::new(r.as_vec3())))
+    Ok(Bsdf::Diffuse(Diffuse::new(r)))
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -203,8 +204,50 @@ fn distribution_type(
 }
 
 /// `alpha` (default 0.1), or both `alpha_u` and `alpha_v`, as Mitsuba's microfacet plugins
-/// (used as given, clamped to ≥ 10⁻⁴ by the distribution). With `roughness_too`, radia's
+/// (used as given, clamped to ≥ 10⁻⁴ by the distribution), with the textures when any of
+/// them is one (`get_unbounded_texture` in `roughconductor.cpp`/`roughdielectric.cpp`; the
+/// constant α returned then is unused). `textures_ok` is false where Mitsuba takes a plain
+/// float (roughplastic, whose tables are built for one α). With `roughness_too`, radia's
 /// `roughness` (glTF's: α = roughness²) is a third alternative.
+fn alphas_textured(
+    b: &mut Builder<'_>,
+    p: &mut Props<'_>,
+    roughness_too: bool,
+    textures_ok: bool,
+) -> Result<(f32, f32, Option<RoughnessTextures>), LoadError> {
+    let textured = ["alpha", "alpha_u", "alpha_v"]
+        .iter()
+        .any(|n| is_texture(p, n));
+    if !textured {
+        let (au, av) = alphas(p, roughness_too)?;
+        return Ok((au, av, None));
+    }
+    if !textures_ok {
+        return Err(p.err(format!(
+            "{}: the roughness must be a <float> (Mitsuba's {} takes no texture for it)",
+            p.node.plugin, p.node.plugin
+        )));
+    }
+    let has_uv = p.has_any("alpha_u") || p.has_any("alpha_v");
+    if has_uv && p.has_any("alpha") || roughness_too && p.has_any("roughness") {
+        return Err(p.err("microfacet model: please specify either 'alpha' or 'alpha_u'/'alpha_v'"));
+    }
+    let (alpha_u, alpha_v) = if has_uv {
+        if !(p.has_any("alpha_u") && p.has_any("alpha_v")) {
+            return Err(p.err("microfacet model: both 'alpha_u' and 'alpha_v' must be specified"));
+        }
+        (
+            texture_param(b, p, "alpha_u", 0.1, false)?,
+            texture_param(b, p, "alpha_v", 0.1, false)?,
+        )
+    } else {
+        let t = texture_param(b, p, "alpha", 0.1, false)?;
+        (t.clone(), t)
+    };
+    Ok((0.1, 0.1, Some(RoughnessTextures { alpha_u, alpha_v })))
+}
+
+/// The constant form of [`alphas_textured`].
 fn alphas(p: &mut Props<'_>, roughness_too: bool) -> Result<(f32, f32), LoadError> {
     let has_uv = p.has("alpha_u") || p.has("alpha_v");
     let count =
@@ -244,56 +287,55 @@ fn shadowing(p: &mut Props<'_>) -> Result<Shadowing, LoadError> {
     })
 }
 
-fn rgb(c: DVec3) -> Vec3 {
-    c.as_vec3()
-}
 
 // ---------------------------------------------------------------------------------------------
 // Conductors
 // ---------------------------------------------------------------------------------------------
 
 /// `conductor` (`src/bsdfs/conductor.cpp`).
-fn conductor(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
-    let spec = p.color("specular_reflectance", 1.0, true)?;
+fn conductor(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+    let spec = texture_param(b, &mut p, "specular_reflectance", 1.0, true)?;
     let (eta, k) = complex_ior(&mut p)?;
     p.finish()?;
-    Ok(Bsdf::Conductor(Conductor::new(eta, k, rgb(spec))))
+    Ok(Bsdf::Conductor(Conductor::new(eta, k, spec)))
 }
 
 /// `roughconductor` (`src/bsdfs/roughconductor.cpp`): Beckmann by default, α 0.1, visible
 /// normals; radia's `height_correlated` option.
-fn rough_conductor(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+fn rough_conductor(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadError> {
     let (eta, k) = complex_ior(&mut p)?;
     let kind = distribution_type(&mut p, MicrofacetType::Beckmann)?;
     let visible = p.boolean("sample_visible", true)?;
-    let (au, av) = alphas(&mut p, false)?;
-    let spec = p.color("specular_reflectance", 1.0, true)?;
+    let (au, av, alpha_tex) = alphas_textured(b, &mut p, false, true)?;
+    let spec = texture_param(b, &mut p, "specular_reflectance", 1.0, true)?;
     let g = shadowing(&mut p)?;
     p.finish()?;
     let d = MicrofacetDistribution::new(kind, au, av, visible);
     Ok(Bsdf::RoughConductor(
-        RoughConductor::new(d, eta, k, rgb(spec)).with_shadowing(g),
+        RoughConductor::new(d, eta, k, spec)
+            .with_shadowing(g)
+            .with_roughness(alpha_tex),
     ))
 }
 
 /// radia's `cooktorrance`: GGX by default; `F0`, or glTF's `base_color` (default 0.5) and
 /// `metallic` (default 0, in [0, 1]); `alpha`, `alpha_u`/`alpha_v` or `roughness`.
-fn cook_torrance(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+fn cook_torrance(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadError> {
     let kind = distribution_type(&mut p, MicrofacetType::Ggx)?;
     let visible = p.boolean("sample_visible", true)?;
     let (au, av) = alphas(&mut p, true)?;
     let g = shadowing(&mut p)?;
-    let gltf = p.has("base_color") || p.has("metallic");
-    let fresnel = if p.has("F0") {
+    let gltf = p.has_any("base_color") || p.has("metallic");
+    let fresnel = if p.has_any("F0") {
         if gltf {
             return Err(p.err("cooktorrance: specify either F0 or base_color/metallic, not both"));
         }
         CookTorranceFresnel::Schlick {
-            f0: rgb(p.color("F0", 0.04, true)?).into(),
+            f0: texture_param(b, &mut p, "F0", 0.04, true)?,
         }
     } else {
         let pos = p.pos_of("metallic");
-        let base_color = rgb(p.color("base_color", 0.5, true)?);
+        let base_color = texture_param(b, &mut p, "base_color", 0.5, true)?;
         let metallic = p.float("metallic", 0.0)?;
         if !(0.0..=1.0).contains(&metallic) {
             return Err(p.err_at(
@@ -302,7 +344,7 @@ fn cook_torrance(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
             ));
         }
         CookTorranceFresnel::MetallicRoughness {
-            base_color: base_color.into(),
+            base_color,
             metallic: metallic as f32,
         }
     };
@@ -316,42 +358,42 @@ fn cook_torrance(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
 // ---------------------------------------------------------------------------------------------
 
 /// `dielectric` (`src/bsdfs/dielectric.cpp`): bk7 inside, air outside by default.
-fn dielectric(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+fn dielectric(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadError> {
     let (int_ior, ext_ior) = ior_pair(&mut p, "bk7", false)?;
-    let r = p.color("specular_reflectance", 1.0, true)?;
-    let t = p.color("specular_transmittance", 1.0, true)?;
+    let r = texture_param(b, &mut p, "specular_reflectance", 1.0, true)?;
+    let t = texture_param(b, &mut p, "specular_transmittance", 1.0, true)?;
     p.finish()?;
     let mut m = Dielectric::new(int_ior, ext_ior);
-    m.specular_reflectance = rgb(r).into();
-    m.specular_transmittance = rgb(t).into();
+    m.specular_reflectance = r;
+    m.specular_transmittance = t;
     Ok(Bsdf::Dielectric(m))
 }
 
 /// `thindielectric` (`src/bsdfs/thindielectric.cpp`).
-fn thin_dielectric(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+fn thin_dielectric(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadError> {
     let (int_ior, ext_ior) = ior_pair(&mut p, "bk7", false)?;
-    let r = p.color("specular_reflectance", 1.0, true)?;
-    let t = p.color("specular_transmittance", 1.0, true)?;
+    let r = texture_param(b, &mut p, "specular_reflectance", 1.0, true)?;
+    let t = texture_param(b, &mut p, "specular_transmittance", 1.0, true)?;
     p.finish()?;
     let mut m = ThinDielectric::new(int_ior, ext_ior);
-    m.specular_reflectance = rgb(r).into();
-    m.specular_transmittance = rgb(t).into();
+    m.specular_reflectance = r;
+    m.specular_transmittance = t;
     Ok(Bsdf::ThinDielectric(m))
 }
 
 /// `roughdielectric` (`src/bsdfs/roughdielectric.cpp`): Beckmann, α 0.1, bk7/air.
-fn rough_dielectric(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
-    let r = p.color("specular_reflectance", 1.0, true)?;
-    let t = p.color("specular_transmittance", 1.0, true)?;
+fn rough_dielectric(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+    let r = texture_param(b, &mut p, "specular_reflectance", 1.0, true)?;
+    let t = texture_param(b, &mut p, "specular_transmittance", 1.0, true)?;
     let (int_ior, ext_ior) = ior_pair(&mut p, "bk7", true)?;
     let kind = distribution_type(&mut p, MicrofacetType::Beckmann)?;
     let visible = p.boolean("sample_visible", true)?;
-    let (au, av) = alphas(&mut p, false)?;
+    let (au, av, alpha_tex) = alphas_textured(b, &mut p, false, true)?;
     p.finish()?;
     let d = MicrofacetDistribution::new(kind, au, av, visible);
-    let mut m = RoughDielectric::new(d, int_ior, ext_ior);
-    m.specular_reflectance = rgb(r).into();
-    m.specular_transmittance = rgb(t).into();
+    let mut m = RoughDielectric::new(d, int_ior, ext_ior).with_roughness(alpha_tex);
+    m.specular_reflectance = r;
+    m.specular_transmittance = t;
     Ok(Bsdf::RoughDielectric(m))
 }
 
@@ -360,30 +402,24 @@ fn rough_dielectric(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
 // ---------------------------------------------------------------------------------------------
 
 /// `plastic` (`src/bsdfs/plastic.cpp`): polypropylene (1.49) in air, diffuse 0.5.
-fn plastic(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+fn plastic(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadError> {
     let (int_ior, ext_ior) = ior_pair(&mut p, "polypropylene", false)?;
-    let d = p.color("diffuse_reflectance", 0.5, true)?;
-    let s = p.color("specular_reflectance", 1.0, true)?;
+    let d = texture_param(b, &mut p, "diffuse_reflectance", 0.5, true)?;
+    let s = texture_param(b, &mut p, "specular_reflectance", 1.0, true)?;
     let nonlinear = p.boolean("nonlinear", false)?;
     p.finish()?;
-    Ok(Bsdf::Plastic(Plastic::new(
-        int_ior,
-        ext_ior,
-        rgb(d),
-        rgb(s),
-        nonlinear,
-    )))
+    Ok(Bsdf::Plastic(Plastic::new(int_ior, ext_ior, d, s, nonlinear)))
 }
 
 /// `roughplastic` (`src/bsdfs/roughplastic.cpp`): Beckmann α 0.1, isotropic only.
-fn rough_plastic(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+fn rough_plastic(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadError> {
     let (int_ior, ext_ior) = ior_pair(&mut p, "polypropylene", true)?;
-    let d = p.color("diffuse_reflectance", 0.5, true)?;
-    let s = p.color("specular_reflectance", 1.0, true)?;
+    let d = texture_param(b, &mut p, "diffuse_reflectance", 0.5, true)?;
+    let s = texture_param(b, &mut p, "specular_reflectance", 1.0, true)?;
     let nonlinear = p.boolean("nonlinear", false)?;
     let kind = distribution_type(&mut p, MicrofacetType::Beckmann)?;
     let visible = p.boolean("sample_visible", true)?;
-    let (au, av) = alphas(&mut p, false)?;
+    let (au, av, _) = alphas_textured(b, &mut p, false, false)?;
     if au != av {
         return Err(p.err(
             "the 'roughplastic' plugin currently does not support anisotropic microfacet distributions",
@@ -396,8 +432,8 @@ fn rough_plastic(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
         visible,
         int_ior,
         ext_ior,
-        rgb(d),
-        rgb(s),
+        d,
+        s,
         nonlinear,
     )))
 }
@@ -409,14 +445,14 @@ fn rough_plastic(mut p: Props<'_>) -> Result<Bsdf, LoadError> {
 /// radia's `phong` and `blinnphong`: `diffuse_reflectance` kd (0.5), `specular_reflectance`
 /// ks (0.2), `exponent` n ≥ 0 (30). kd + ks > 1 reflects more than it receives: a warning.
 fn phong(b: &mut Builder<'_>, mut p: Props<'_>, blinn: bool) -> Result<Bsdf, LoadError> {
-    let kd = p.color("diffuse_reflectance", 0.5, true)?;
-    let ks = p.color("specular_reflectance", 0.2, true)?;
+    let kd = texture_param(b, &mut p, "diffuse_reflectance", 0.5, true)?;
+    let ks = texture_param(b, &mut p, "specular_reflectance", 0.2, true)?;
     let pos = p.pos_of("exponent");
     let n = p.float("exponent", 30.0)?;
     if !(n >= 0.0 && n.is_finite()) {
         return Err(p.err_at(pos, format!("exponent {n} must be finite and ≥ 0")));
     }
-    if (kd + ks).max_element() > 1.0 {
+    if kd.max_value() + ks.max_value() > 1.0 && sum_exceeds_one(&kd, &ks) {
         b.warnings.push(format!(
             "{}:{}: {}: diffuse_reflectance + specular_reflectance exceeds 1: the material creates energy",
             b.doc.file.display(),
@@ -426,10 +462,18 @@ fn phong(b: &mut Builder<'_>, mut p: Props<'_>, blinn: bool) -> Result<Bsdf, Loa
     }
     p.finish()?;
     Ok(if blinn {
-        Bsdf::BlinnPhong(BlinnPhong::new(rgb(kd), rgb(ks), n as f32))
+        Bsdf::BlinnPhong(BlinnPhong::new(kd, ks, n as f32))
     } else {
-        Bsdf::Phong(Phong::new(rgb(kd), rgb(ks), n as f32))
+        Bsdf::Phong(Phong::new(kd, ks, n as f32))
     })
+}
+
+/// kd + ks > 1 in some channel: exactly for constants, by the channel maxima otherwise.
+fn sum_exceeds_one(kd: &Texture, ks: &Texture) -> bool {
+    match (kd.as_constant(), ks.as_constant()) {
+        (Some(a), Some(b)) => (a + b).max_element() > 1.0,
+        _ => true,
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -464,20 +508,25 @@ fn nested(
 /// exactly two nested BSDFs; f = (1 − w) f₀ + w f₁.
 fn blend(b: &mut Builder<'_>, mut p: Props<'_>, nesting: usize) -> Result<Bsdf, LoadError> {
     let bsdfs = nested(b, &mut p, nesting, "blendbsdf")?;
-    if !p.has("weight") {
+    if !p.has_any("weight") {
         return Err(p.err("blendbsdf: the parameter \"weight\" is required"));
     }
-    let w = p.float("weight", 0.0)?;
-    if !w.is_finite() {
-        return Err(p.err_at(p.pos_of("weight"), "blendbsdf: weight must be finite"));
-    }
+    let w = if is_texture(&p, "weight") {
+        texture_param(b, &mut p, "weight", 0.0, false)?
+    } else {
+        let w = p.float("weight", 0.0)?;
+        if !w.is_finite() {
+            return Err(p.err_at(p.pos_of("weight"), "blendbsdf: weight must be finite"));
+        }
+        Texture::from(w as f32)
+    };
     if bsdfs.len() != 2 {
         return Err(p.err("blendbsdf: two child BSDFs must be specified"));
     }
     p.finish()?;
     let mut it = bsdfs.into_iter().map(|(b, _)| b);
     let (first, second) = (it.next().unwrap(), it.next().unwrap());
-    Ok(Bsdf::Blend(Blend::new(w as f32, first, second)))
+    Ok(Bsdf::Blend(Blend::textured(w, first, second)))
 }
 
 /// `twosided` (`src/bsdfs/twosided.cpp`): one nested BSDF for both sides, or two (front,
@@ -545,7 +594,7 @@ mod tests {
         }
     }
 
-    const SP: ShadingPoint = ShadingPoint { uv: Vec2::ZERO };
+    const SP: ShadingPoint = ShadingPoint::at_uv(Vec2::ZERO);
 
     #[test]
     fn loader_bsdfs_conductors() {

@@ -5,6 +5,7 @@ use super::bsdfs::build_bsdf;
 use super::emitters::build_emitter;
 use super::props::Props;
 use super::shapes::build_shape;
+use super::textures::build_texture;
 use super::transform;
 use super::xml::{Doc, Kind};
 use super::LoadError;
@@ -12,7 +13,7 @@ use crate::{
     CameraDesc, EmitterDesc, FilmDesc, FilterDesc, IntegratorDesc, SamplerDesc, SceneDescription,
 };
 use glam::Affine3A;
-use radia_bsdf::Bsdf;
+use radia_bsdf::{Bsdf, Texture};
 use radia_sampling::SamplerKind;
 use std::collections::HashMap;
 
@@ -21,6 +22,8 @@ pub(crate) struct Builder<'a> {
     pub doc: &'a Doc,
     /// Built BSDFs by node, so that a referenced material is built once.
     pub bsdf_cache: HashMap<usize, Bsdf>,
+    /// Built textures by node: a referenced image is decoded once and shared.
+    pub texture_cache: HashMap<usize, Texture>,
     /// Non-fatal notes (Mitsuba's warnings), "file:line:col: message".
     pub warnings: Vec<String>,
 }
@@ -32,6 +35,7 @@ pub(crate) fn build_scene(doc: &Doc) -> Result<(SceneDescription, Vec<String>), 
     let mut b = Builder {
         doc,
         bsdf_cache: HashMap::new(),
+        texture_cache: HashMap::new(),
         warnings: Vec::new(),
     };
     let mut p = Props::new(doc, 0);
@@ -76,6 +80,9 @@ pub(crate) fn build_scene(doc: &Doc) -> Result<(SceneDescription, Vec<String>), 
             // Definitions for later references; built here so that their errors surface.
             Kind::Bsdf => {
                 build_bsdf(&mut b, n, 0)?;
+            }
+            Kind::Texture => {
+                build_texture(&mut b, n, 0)?;
             }
             Kind::Film => {
                 build_film(&b, n)?;

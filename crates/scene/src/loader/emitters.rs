@@ -9,7 +9,7 @@ use super::shapes::resolve_path;
 use super::LoadError;
 use crate::EmitterDesc;
 use glam::{Affine3A, DMat4, DVec3};
-use radia_math::Spectrum;
+use radia_bsdf::Texture;
 
 /// A top-level emitter.
 pub(crate) fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<EmitterDesc, LoadError> {
@@ -88,12 +88,13 @@ pub(crate) fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<EmitterDesc, 
     Ok(e)
 }
 
-/// The `area` emitter of a shape (`src/emitters/area.cpp`): its radiance.
-pub(crate) fn area_emitter(b: &Builder<'_>, idx: usize) -> Result<Spectrum, LoadError> {
+/// The `area` emitter of a shape (`src/emitters/area.cpp`): its radiance, a colour or a
+/// texture (`get_texture<Texture>("radiance")`, unbounded).
+pub(crate) fn area_emitter(b: &mut Builder<'_>, idx: usize) -> Result<Texture, LoadError> {
     let mut p = Props::new(b.doc, idx);
     match p.node.plugin.as_str() {
         "area" => {
-            let radiance = p.color("radiance", 1.0, false)?.as_vec3();
+            let radiance = super::textures::texture_param(b, &mut p, "radiance", 1.0, false)?;
             p.finish()?;
             Ok(radiance)
         }

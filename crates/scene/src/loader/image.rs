@@ -1,7 +1,10 @@
-//! Reading the images emitters (and, later, textures) use, as Mitsuba's `Bitmap` does
-//! (`src/core/bitmap.cpp`): OpenEXR and Radiance RGBE (.hdr) are linear; PNG, 8- or 16-bit, is
-//! sRGB-encoded and decoded to linear here. Grey images become RGB; alpha is dropped. The
-//! format is recognised by the file's first bytes, not its name.
+//! Reading the images emitters and textures use, as Mitsuba's `Bitmap` does
+//! (`src/core/bitmap.cpp`): OpenEXR and Radiance RGBE (.hdr) are linear; PNG (8- or 16-bit)
+//! and JPEG are sRGB-encoded and decoded to linear here. Alpha is dropped. The format is
+//! recognised by the file's first bytes, not its name.
+//!
+//! [`read_rgb_image`] (environment maps) makes grey images RGB; [`read_texture_image`]
+//! keeps one channel for grey images, as Mitsuba's bitmap texture stores `Y` images.
 
 use crate::description::RgbImage;
 use glam::Vec3;
@@ -43,6 +46,76 @@ pub(crate) fn read_rgb_image(path: &Path) -> Result<RgbImage, String> {
     } else {
         Err("unsupported image format (radia reads OpenEXR, Radiance .hdr and PNG)".into())
     }
+}
+
+/// A decoded texture image: linear values, row 0 at the top, 1 (grey) or 3 (RGB) channels.
+pub(crate) struct TextureImage {
+    pub width: usize,
+    pub height: usize,
+    pub channels: usize,
+    pub data: Vec<f32>,
+}
+
+/// Reads `path` for a `bitmap` texture. With `raw`, 8- and 16-bit values are not
+/// sRGB-decoded (value / 255 or / 65535), as Mitsuba's `raw` parameter; float formats are
+/// linear either way.
+pub(crate) fn read_texture_image(path: &Path, raw: bool) -> Result<TextureImage, String> {
+    use image::DynamicImage as D;
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read image file: {e}"))?;
+    if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
+        let rgb = read_exr(path)?;
+        return Ok(TextureImage {
+            width: rgb.width as usize,
+            height: rgb.height as usize,
+            channels: 3,
+            data: rgb.pixels.iter().flat_map(|p| p.to_array()).collect(),
+        });
+    }
+    let format = if bytes.starts_with(b"\x89PNG") {
+        image::ImageFormat::Png
+    } else if bytes.starts_with(&[0xff, 0xd8, 0xff]) {
+        image::ImageFormat::Jpeg
+    } else if bytes.starts_with(b"#?") {
+        image::ImageFormat::Hdr
+    } else {
+        return Err(
+            "unsupported image format (radia reads PNG, JPEG, OpenEXR and Radiance .hdr)".into(),
+        );
+    };
+    let img = image::load_from_memory_with_format(&bytes, format)
+        .map_err(|e| format!("cannot decode image: {e}"))?;
+    let (width, height) = (img.width() as usize, img.height() as usize);
+    let decode16 = |v: u16| {
+        let x = v as f32 / 65535.0;
+        if raw {
+            x
+        } else {
+            srgb_to_linear(x)
+        }
+    };
+    // Keep the first `keep` of every `stride` samples (drops alpha).
+    fn take<T: Copy>(v: &[T], stride: usize, keep: usize) -> Vec<T> {
+        v.chunks_exact(stride).flat_map(|c| c[..keep].iter().copied()).collect()
+    }
+    let (channels, data) = match &img {
+        D::ImageLuma8(i) => (1, radia_bsdf::decode_8bit(i.as_raw(), raw)),
+        D::ImageLumaA8(i) => (1, radia_bsdf::decode_8bit(&take(i.as_raw(), 2, 1), raw)),
+        D::ImageRgb8(i) => (3, radia_bsdf::decode_8bit(i.as_raw(), raw)),
+        D::ImageRgba8(i) => (3, radia_bsdf::decode_8bit(&take(i.as_raw(), 4, 3), raw)),
+        D::ImageLuma16(i) => (1, i.as_raw().iter().map(|&v| decode16(v)).collect()),
+        D::ImageLumaA16(i) => (1, take(i.as_raw(), 2, 1).into_iter().map(decode16).collect()),
+        D::ImageRgb16(i) => (3, i.as_raw().iter().map(|&v| decode16(v)).collect()),
+        D::ImageRgba16(i) => (3, take(i.as_raw(), 4, 3).into_iter().map(decode16).collect()),
+        D::ImageRgb32F(i) => (3, i.as_raw().clone()),
+        D::ImageRgba32F(i) => (3, take(i.as_raw(), 4, 3)),
+        other => (3, other.to_rgb32f().into_raw()),
+    };
+    Ok(TextureImage {
+        width,
+        height,
+        channels,
+        data,
+    })
 }
 
 fn read_exr(path: &Path) -> Result<RgbImage, String> {

@@ -7,7 +7,7 @@
 //!
 //! 1. `xml.rs`: the text becomes plugin nodes with typed properties (`$name` substitution,
 //!    `<default>`, values, `<transform>`, ids and references).
-//! 2. `build.rs`, `shapes.rs`, `bsdfs.rs`, `emitters.rs`: each plugin reads its parameters,
+//! 2. `build.rs`, `shapes.rs`, `bsdfs.rs`, `emitters.rs`, `textures.rs`: each plugin reads its parameters,
 //!    with Mitsuba's names, defaults and checks, into the [`SceneDescription`]. Parameters a
 //!    plugin does not read are reported.
 
@@ -21,6 +21,7 @@ mod obj;
 mod ply;
 mod props;
 mod shapes;
+mod textures;
 mod transform;
 mod xml;
 

@@ -155,7 +155,7 @@ impl<'a> Props<'a> {
                 (i, *c)
             }
             Some((i, Value::Object(_))) | Some((i, _)) => {
-                return Err(self.wrong_type(i, "<rgb> or <float> (textures are not supported yet)"))
+                return Err(self.wrong_type(i, "<rgb>, <float> or <texture>"))
             }
         };
         if !c.is_finite() {
@@ -179,6 +179,25 @@ impl<'a> Props<'a> {
                 _ => None,
             })
             .collect()
+    }
+
+    /// The not yet consumed object property called `name` (a nested `<texture name=...>` or
+    /// a `<ref name=... id=...>`): (property index, node index).
+    pub fn object_named(&self, name: &str) -> Option<(usize, usize)> {
+        self.node
+            .props
+            .iter()
+            .enumerate()
+            .find(|(i, p)| !self.used[*i] && p.name == name && matches!(p.value, Value::Object(_)))
+            .map(|(i, p)| match p.value {
+                Value::Object(n) => (i, n),
+                _ => unreachable!("filtered on Object"),
+            })
+    }
+
+    /// True when `name` is given, as a value or as an object.
+    pub fn has_any(&self, name: &str) -> bool {
+        self.node.props.iter().any(|p| p.name == name)
     }
 
     /// Marks the object property `i` as consumed.

@@ -743,10 +743,10 @@ fn loader_twosided_and_default_bsdfs() {
         0.0,
         "default bsdf of an emitter is black",
     );
-    assert_eq!(s.shapes[3].emission, Some(Vec3::new(2., 3., 4.)));
+    assert_eq!(s.shapes[3].emission, Some(Vec3::new(2., 3., 4.).into()));
     assert_eq!(
         s.shapes[4].emission,
-        Some(Vec3::ONE),
+        Some(Vec3::ONE.into()),
         "area radiance defaults to 1"
     );
     assert_eq!(

@@ -10,8 +10,8 @@ use glam::{DMat4, DVec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-/// Object element kinds radia can build. Mitsuba also has `texture`, `medium`, `phase` and
-/// `volume`; those are rejected while parsing.
+/// Object element kinds radia can build. Mitsuba also has `medium`, `phase` and `volume`;
+/// those are rejected while parsing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Kind {
     Scene,
@@ -23,6 +23,7 @@ pub(crate) enum Kind {
     Shape,
     Bsdf,
     Emitter,
+    Texture,
 }
 
 impl Kind {
@@ -38,6 +39,7 @@ impl Kind {
             Kind::Shape => "shape",
             Kind::Bsdf => "bsdf",
             Kind::Emitter => "emitter",
+            Kind::Texture => "texture",
         }
     }
 }
@@ -612,6 +614,7 @@ impl<'a, 'x> Parser<'a, 'x> {
             "shape" => Some(Kind::Shape),
             "bsdf" => Some(Kind::Bsdf),
             "emitter" => Some(Kind::Emitter),
+            "texture" => Some(Kind::Texture),
             _ => None,
         };
         if let Some(kind) = kind {
@@ -777,7 +780,7 @@ impl<'a, 'x> Parser<'a, 'x> {
                 epos,
                 format!("transform operation <{tag}> can only appear inside a <transform> element"),
             )),
-            "texture" | "medium" | "phase" | "volume" => {
+            "medium" | "phase" | "volume" => {
                 Err(self.err(epos, format!("<{tag}> objects are not supported by radia")))
             }
             "spectrum" => Err(self.err(

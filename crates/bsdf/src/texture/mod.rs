@@ -1,0 +1,161 @@
+//! Spatially varying parameters: Mitsuba's `Texture` (`include/mitsuba/render/texture.h`).
+//!
+//! | Mitsuba plugin | variant | file |
+//! | --- | --- | --- |
+//! | `<rgb>`/`<float>` (`srgb`, `uniform`) | [`Texture::Constant`] | here |
+//! | `bitmap` | [`Texture::Bitmap`] ([`Bitmap`]) | `bitmap.rs` |
+//! | `checkerboard` | [`Texture::Checkerboard`] ([`Checkerboard`]) | `checkerboard.rs` |
+//!
+//! A texture is looked up at the [`ShadingPoint`]'s `uv`. The constant case is the first
+//! arm of every `match` and returns the stored value, so scenes without textures pay one
+//! predictable branch; image data sits behind an `Arc` so that a model holding a texture
+//! stays small and cheap to clone (the loader shares one decoded image between every
+//! parameter that references it).
+//!
+//! The same type serves colour parameters ([`Texture::eval`], Mitsuba's `eval`/`eval_3`)
+//! and scalar ones such as roughness or a blend weight ([`Texture::eval_1`], Mitsuba's
+//! `eval_1`: the luminance of a colour texture).
+
+use crate::ShadingPoint;
+use glam::Vec2;
+use radia_math::Spectrum;
+use std::sync::Arc;
+
+mod bitmap;
+mod checkerboard;
+
+pub use bitmap::{decode_8bit, srgb_to_linear, Bitmap, BitmapError, FilterType, WrapMode};
+pub use checkerboard::Checkerboard;
+
+/// A spatially varying parameter.
+#[derive(Clone, Debug)]
+pub enum Texture {
+    Constant(Spectrum),
+    Bitmap(Arc<Bitmap>),
+    Checkerboard(Arc<Checkerboard>),
+}
+
+impl PartialEq for Texture {
+    /// Constants compare by value, image textures by identity (the same shared image).
+    fn eq(&self, other: &Self) -> bool {
+        match (self, other) {
+            (Texture::Constant(a), Texture::Constant(b)) => a == b,
+            (Texture::Bitmap(a), Texture::Bitmap(b)) => Arc::ptr_eq(a, b),
+            (Texture::Checkerboard(a), Texture::Checkerboard(b)) => Arc::ptr_eq(a, b),
+            _ => false,
+        }
+    }
+}
+
+impl Texture {
+    /// The colour at `sp` (Mitsuba's `eval` in an RGB variant; a one-channel texture gives
+    /// grey).
+    #[inline]
+    pub fn eval(&self, sp: &ShadingPoint) -> Spectrum {
+        match self {
+            Texture::Constant(c) => *c,
+            Texture::Bitmap(b) => b.eval(sp.uv),
+            Texture::Checkerboard(c) => c.eval(sp),
+        }
+    }
+
+    /// The scalar value at `sp` (Mitsuba's `eval_1`): a float constant as given, the mean
+    /// of an RGB constant's channels (`src/spectra/srgb.cpp`), the luminance of a
+    /// three-channel image (`src/textures/bitmap.cpp`).
+    #[inline]
+    pub fn eval_1(&self, sp: &ShadingPoint) -> f32 {
+        match self {
+            Texture::Constant(c) => constant_1(*c),
+            Texture::Bitmap(b) => b.eval_1(sp.uv),
+            Texture::Checkerboard(c) => c.eval_1(sp),
+        }
+    }
+
+    /// The gradient of [`Texture::eval_1`] with respect to (u, v) (Mitsuba's `eval_1_grad`,
+    /// what `bumpmap` needs): zero for constants and for nearest-neighbour images.
+    /// `None` for a texture that has no gradient (Mitsuba's checkerboard raises
+    /// "not implemented"): the loader refuses it.
+    #[inline]
+    pub fn eval_1_grad(&self, sp: &ShadingPoint) -> Option<Vec2> {
+        match self {
+            Texture::Constant(_) => Some(Vec2::ZERO),
+            Texture::Bitmap(b) => Some(b.eval_1_grad(sp.uv)),
+            Texture::Checkerboard(_) => None,
+        }
+    }
+
+    /// The mean that Mitsuba's `Texture::mean()` returns, for lobe sampling weights fixed at
+    /// load time: the mean of the three channels of a constant, the mean luminance of an
+    /// image's texels, the average of a checkerboard's two colours' means.
+    pub fn mean(&self) -> f32 {
+        match self {
+            Texture::Constant(c) => crate::mean(*c),
+            Texture::Bitmap(b) => b.mean(),
+            Texture::Checkerboard(c) => c.mean(),
+        }
+    }
+
+    /// The largest value any channel takes anywhere (for checks such as "reflectance ≤ 1"
+    /// and for light power estimates).
+    pub fn max_value(&self) -> f32 {
+        match self {
+            Texture::Constant(c) => c.max_element(),
+            Texture::Bitmap(b) => b.max_value(),
+            Texture::Checkerboard(c) => c.color0.max_value().max(c.color1.max_value()),
+        }
+    }
+
+    /// True when the texture has the same value everywhere (Mitsuba's
+    /// `!is_spatially_varying()`).
+    pub fn is_constant(&self) -> bool {
+        matches!(self, Texture::Constant(_))
+    }
+
+    /// The constant value, if the texture is one.
+    pub fn as_constant(&self) -> Option<Spectrum> {
+        match self {
+            Texture::Constant(c) => Some(*c),
+            _ => None,
+        }
+    }
+}
+
+/// `eval_1` of a constant: grey exactly as given (Mitsuba's `uniform`), else the mean of the
+/// channels (its `srgb` texture's `eval_1` returns `mean()`).
+#[inline]
+fn constant_1(c: Spectrum) -> f32 {
+    if c.x == c.y && c.y == c.z {
+        c.x
+    } else {
+        crate::mean(c)
+    }
+}
+
+impl From<Spectrum> for Texture {
+    fn from(c: Spectrum) -> Self {
+        Texture::Constant(c)
+    }
+}
+
+impl From<f32> for Texture {
+    fn from(x: f32) -> Self {
+        Texture::Constant(Spectrum::splat(x))
+    }
+}
+
+impl From<Bitmap> for Texture {
+    fn from(b: Bitmap) -> Self {
+        Texture::Bitmap(Arc::new(b))
+    }
+}
+
+impl From<Checkerboard> for Texture {
+    fn from(c: Checkerboard) -> Self {
+        Texture::Checkerboard(Arc::new(c))
+    }
+}
+
+/// A 2D affine map of texture coordinates (Mitsuba's `to_uv`, a `ScalarAffineTransform3f`):
+/// uv' = M uv + t. From a 4×4 `<transform>`, Mitsuba keeps rows and columns 0 and 1 and the
+/// translation column (`Transform::extract` in `include/mitsuba/core/transform.h`).
+pub type UvTransform = glam::Affine2;
