@@ -37,16 +37,21 @@
 //! | `roughplastic` | [`RoughPlastic`] | `rough_plastic.rs` |
 //! | `blendbsdf` | [`Blend`] | `blend.rs` |
 //! | `twosided` | [`TwoSided`] | `twosided.rs` |
+//! | `normalmap` | [`NormalMap`] | `normal_map.rs` |
+//! | `bumpmap` | [`BumpMap`] | `bump_map.rs` |
 //!
 //! Shared pieces: [`microfacet`] (Beckmann and GGX distributions, Smith masking, visible
 //! normal sampling), [`fresnel`] (dielectric, conductor and Schlick Fresnel, reflect and
-//! refract), [`ior`] (Mitsuba's named indices of refraction and conductor presets).
+//! refract), [`ior`] (Mitsuba's named indices of refraction and conductor presets),
+//! `perturbed.rs` (the shading-frame change `normalmap` and `bumpmap` share), [`Texture`]
+//! (`texture/`: constants, bitmaps, checkerboards).
 
 use glam::{Vec2, Vec3};
 use radia_math::Spectrum;
 
 mod blend;
 mod blinn_phong;
+mod bump_map;
 mod conductor;
 mod cook_torrance;
 mod dielectric;
@@ -54,6 +59,8 @@ mod diffuse;
 pub mod fresnel;
 pub mod ior;
 pub mod microfacet;
+mod normal_map;
+mod perturbed;
 mod phong;
 mod plastic;
 mod rough_conductor;
@@ -68,11 +75,14 @@ mod testing;
 
 pub use blend::Blend;
 pub use blinn_phong::BlinnPhong;
+pub use bump_map::BumpMap;
 pub use conductor::Conductor;
 pub use cook_torrance::{CookTorrance, CookTorranceFresnel};
 pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
 pub use microfacet::{MicrofacetDistribution, MicrofacetType};
+pub use normal_map::NormalMap;
+pub use perturbed::PerturbOptions;
 pub use phong::Phong;
 pub use plastic::Plastic;
 pub use rough_conductor::RoughConductor;
@@ -194,6 +204,8 @@ pub enum Bsdf {
     RoughPlastic(RoughPlastic),
     Blend(Blend),
     TwoSided(TwoSided),
+    NormalMap(NormalMap),
+    BumpMap(BumpMap),
 }
 
 /// Expands to a `match` that calls `$method` on whichever model `$self` holds.
@@ -213,6 +225,8 @@ macro_rules! dispatch {
             Bsdf::RoughPlastic($m) => $call,
             Bsdf::Blend($m) => $call,
             Bsdf::TwoSided($m) => $call,
+            Bsdf::NormalMap($m) => $call,
+            Bsdf::BumpMap($m) => $call,
         }
     };
 }
@@ -330,7 +344,7 @@ mod tests {
         let exponent = log_uniform(rng, 1e-3, 1e5);
         let presets = crate::ior::CONDUCTOR_PRESETS;
         let preset = presets[rng.random_range(0..presets.len())];
-        let n = if depth > 0 { 13 } else { 11 };
+        let n = if depth > 0 { 15 } else { 11 };
         match rng.random_range(0..n) {
             0 => Bsdf::Diffuse(Diffuse::new(random_color(rng))),
             1 => Bsdf::Phong(Phong::new(
@@ -391,10 +405,30 @@ mod tests {
                 random_bsdf(rng, depth - 1),
                 random_bsdf(rng, depth - 1),
             )),
-            _ => {
+            12 => {
                 let front = random_reflective(rng, depth - 1);
                 let back = random_reflective(rng, depth - 1);
                 Bsdf::TwoSided(TwoSided::new(front, back))
+            }
+            13 => Bsdf::NormalMap(NormalMap::new(
+                // Any colour, including mid-grey (a zero normal) and pure axes.
+                random_color(rng).into(),
+                random_bsdf(rng, depth - 1),
+                PerturbOptions {
+                    flip_invalid_normals: rng.random(),
+                    use_shadowing_function: rng.random(),
+                },
+            )),
+            _ => {
+                let data: Vec<f32> = (0..4).map(|_| rng.random()).collect();
+                let height = Bitmap::new(2, 2, 1, data, FilterType::Bilinear, WrapMode::Repeat, UvTransform::IDENTITY)
+                    .expect("valid bitmap");
+                Bsdf::BumpMap(BumpMap::new(
+                    height.into(),
+                    log_uniform(rng, 1e-3, 1e3),
+                    random_bsdf(rng, depth - 1),
+                    PerturbOptions::default(),
+                ))
             }
         }
     }

@@ -9,7 +9,7 @@
 
 use super::build::Builder;
 use super::props::Props;
-use super::textures::{is_texture, texture_param};
+use super::textures::{build_texture, is_texture, texture_param};
 use super::xml::{Kind, Value};
 use super::LoadError;
 use glam::Vec3;
@@ -19,8 +19,8 @@ use radia_bsdf::ior::{
 use radia_bsdf::microfacet::{RoughnessTextures, Shadowing};
 use radia_bsdf::{
     Blend, BlinnPhong, Bsdf, Conductor, CookTorrance, CookTorranceFresnel, Dielectric, Diffuse,
-    LobeFlags, MicrofacetDistribution, MicrofacetType, Phong, Plastic, RoughConductor,
-    RoughDielectric, RoughPlastic, Texture, ThinDielectric, TwoSided,
+    BumpMap, LobeFlags, MicrofacetDistribution, MicrofacetType, NormalMap, PerturbOptions,
+    Phong, Plastic, RoughConductor, ShadingPoint, RoughDielectric, RoughPlastic, Texture, ThinDielectric, TwoSided,
 };
 
 /// Nested BSDFs (twosided of twosided ...) deeper than this are refused.
@@ -28,8 +28,8 @@ const MAX_NESTING: usize = 32;
 
 /// The plugin names [`build_bsdf`] knows, for the error message.
 const SUPPORTED: &str = "diffuse, conductor, roughconductor, dielectric, thindielectric, \
-roughdielectric, plastic, roughplastic, blendbsdf, twosided, and radia's phong, blinnphong, \
-cooktorrance";
+roughdielectric, plastic, roughplastic, blendbsdf, twosided, normalmap, bumpmap, and radia's \
+phong, blinnphong, cooktorrance";
 
 /// Builds the BSDF of node `idx`. A node referenced several times is built once.
 pub(crate) fn build_bsdf(
@@ -57,6 +57,8 @@ pub(crate) fn build_bsdf(
         "roughplastic" => rough_plastic(b, p)?,
         "blendbsdf" => blend(b, p, nesting)?,
         "twosided" => twosided(b, p, nesting)?,
+        "normalmap" => normal_map(b, p, nesting)?,
+        "bumpmap" => bump_map(b, p, nesting)?,
         "phong" => phong(b, p, false)?,
         "blinnphong" => phong(b, p, true)?,
         "cooktorrance" => cook_torrance(b, p)?,
@@ -548,6 +550,80 @@ fn twosided(b: &mut Builder<'_>, mut p: Props<'_>, nesting: usize) -> Result<Bsd
     let front = sides[0].0.clone();
     let back = sides.get(1).map_or_else(|| front.clone(), |s| s.0.clone());
     Ok(Bsdf::TwoSided(TwoSided::new(front, back)))
+}
+
+/// The single nested BSDF of `normalmap`/`bumpmap`, and their two options.
+fn perturbing(
+    b: &mut Builder<'_>,
+    p: &mut Props<'_>,
+    nesting: usize,
+    plugin: &str,
+) -> Result<(Bsdf, PerturbOptions), LoadError> {
+    let mut bsdfs = nested(b, p, nesting, plugin)?;
+    if bsdfs.len() > 1 {
+        return Err(p.err_at(
+            bsdfs[1].1,
+            format!("{plugin}: only a single BSDF child object can be specified"),
+        ));
+    }
+    let Some((nested_bsdf, _)) = bsdfs.pop() else {
+        return Err(p.err(format!(
+            "{plugin}: exactly one BSDF child object must be specified"
+        )));
+    };
+    let options = PerturbOptions {
+        flip_invalid_normals: p.boolean("flip_invalid_normals", true)?,
+        use_shadowing_function: p.boolean("use_shadowing_function", true)?,
+    };
+    Ok((nested_bsdf, options))
+}
+
+/// `normalmap` (`src/bsdfs/normalmap.cpp`): the texture `normalmap` (required) and one
+/// nested BSDF.
+fn normal_map(b: &mut Builder<'_>, mut p: Props<'_>, nesting: usize) -> Result<Bsdf, LoadError> {
+    let (nested_bsdf, options) = perturbing(b, &mut p, nesting, "normalmap")?;
+    if !p.has_any("normalmap") {
+        return Err(p.err("normalmap: the parameter \"normalmap\" (a texture) is required"));
+    }
+    let normals = texture_param(b, &mut p, "normalmap", 0.5, true)?;
+    p.finish()?;
+    Ok(Bsdf::NormalMap(NormalMap::new(normals, nested_bsdf, options)))
+}
+
+/// `bumpmap` (`src/bsdfs/bumpmap.cpp`): one nested texture of any name (the height), one
+/// nested BSDF, `scale` (1).
+fn bump_map(b: &mut Builder<'_>, mut p: Props<'_>, nesting: usize) -> Result<Bsdf, LoadError> {
+    let (nested_bsdf, options) = perturbing(b, &mut p, nesting, "bumpmap")?;
+    let mut height = None;
+    for (i, n, kind) in p.objects() {
+        if kind != Kind::Texture {
+            continue;
+        }
+        if height.is_some() {
+            return Err(p.err_at(
+                p.prop_pos(i),
+                "bumpmap: only a single Texture child object can be specified",
+            ));
+        }
+        p.take(i);
+        let t = build_texture(b, n, 1)?;
+        if t.eval_1_grad(&ShadingPoint::default()).is_none() {
+            return Err(p.err_at(
+                p.prop_pos(i),
+                "bumpmap: the height texture has no gradient (use a bitmap; Mitsuba's checkerboard does not implement eval_1_grad)",
+            ));
+        }
+        height = Some(t);
+    }
+    let Some(height) = height else {
+        return Err(p.err("bumpmap: exactly one Texture child object must be specified"));
+    };
+    let scale = p.float("scale", 1.0)?;
+    if !scale.is_finite() {
+        return Err(p.err_at(p.pos_of("scale"), "bumpmap: scale must be finite"));
+    }
+    p.finish()?;
+    Ok(Bsdf::BumpMap(BumpMap::new(height, scale as f32, nested_bsdf, options)))
 }
 
 #[cfg(test)]

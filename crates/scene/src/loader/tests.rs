@@ -1465,7 +1465,11 @@ fn loader_unsupported_and_unknown() {
     assert_eq!(e.line, Some(5));
     expect_err(
         load("texture", r#"<texture type="bitmap" id="t"/>"#),
-        "<texture> objects are not supported",
+        "bitmap: the \"filename\" parameter is required",
+    );
+    expect_err(
+        load("medium", r#"<medium type="homogeneous" id="m"/>"#),
+        "<medium> objects are not supported",
     );
     expect_err(
         load("include", r#"<include filename="x.xml"/>"#),
@@ -1766,4 +1770,168 @@ fn loader_corrupted_inputs_never_panic() {
     );
     let e = load_in(&temp_dir("deep"), &deep, &[]).expect_err("deep nesting");
     assert!(e.to_string().contains("nested more than"), "{e}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Textures
+// ---------------------------------------------------------------------------------------------
+
+/// An 8-bit PNG of `channels` (1 or 3) from raw bytes, row 0 at the top.
+fn png(width: u32, height: u32, channels: u8, bytes: &[u8]) -> Vec<u8> {
+    use image::ImageEncoder;
+    let mut out = Vec::new();
+    let color = if channels == 1 {
+        image::ExtendedColorType::L8
+    } else {
+        image::ExtendedColorType::Rgb8
+    };
+    image::codecs::png::PngEncoder::new(&mut out)
+        .write_image(bytes, width, height, color)
+        .expect("encode png");
+    out
+}
+
+fn first_bsdf(s: &SceneDescription, i: usize) -> &Bsdf {
+    &s.shapes[i].bsdf
+}
+
+fn at(u: f32, v: f32) -> radia_bsdf::ShadingPoint {
+    radia_bsdf::ShadingPoint::at_uv(Vec2::new(u, v))
+}
+
+/// A 2×2 sRGB PNG as a diffuse reflectance: texel centres give the decoded bytes, row 0
+/// of the file is v = 0, `raw` gives byte/255, `nearest`, `mirror` and `to_uv` are read.
+#[test]
+fn bitmap_texture_parameters() {
+    let img = png(2, 2, 3, &[255, 0, 0, 0, 255, 0, 0, 0, 255, 188, 188, 188]);
+    let dir = write_files("bitmap", &[("t.png", &img)]);
+    let xml = scene_xml(
+        r#"<shape type="sphere"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">
+            <string name="filename" value="t.png"/></texture></bsdf></shape>
+        <shape type="sphere"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">
+            <string name="filename" value="t.png"/><boolean name="raw" value="true"/>
+            <string name="filter_type" value="nearest"/><string name="wrap_mode" value="mirror"/>
+            <transform name="to_uv"><scale x="2" y="1"/><translate x="0.5"/></transform>
+        </texture></bsdf></shape>"#,
+    );
+    let s = load_in(&dir, &xml, &[]).unwrap();
+    let Bsdf::Diffuse(d) = first_bsdf(&s, 0) else { panic!() };
+    assert!(matches!(d.reflectance, Texture::Bitmap(_)));
+    let grey = radia_bsdf::srgb_to_linear(188.0 / 255.0);
+    assert!((d.reflectance.eval(&at(0.75, 0.75)) - Vec3::splat(grey)).abs().max_element() < 1e-6);
+    assert_eq!(d.reflectance.eval(&at(0.25, 0.25)), Vec3::X);
+    assert_eq!(d.reflectance.eval(&at(0.75, 0.25)), Vec3::Y);
+    let Bsdf::Diffuse(r) = first_bsdf(&s, 1) else { panic!() };
+    // uv' = (2u + 0.5, v): u = 0.3 → 1.1, mirrored into texel 1 of row 1 (raw 188/255).
+    assert!((r.reflectance.eval(&at(0.3, 0.7)) - Vec3::splat(188.0 / 255.0)).abs().max_element() < 1e-6);
+    // u = 0.05 → 0.6, texel 1 of row 0: green.
+    assert_eq!(r.reflectance.eval(&at(0.05, 0.2)), Vec3::Y);
+}
+
+/// A top-level texture referenced twice is decoded once and shared; a checkerboard may nest
+/// a texture; alpha, blend weights and area radiance take textures.
+#[test]
+fn texture_refs_and_parameters() {
+    let img = png(4, 4, 1, &[10, 50, 90, 130, 20, 60, 100, 140, 30, 70, 110, 150, 40, 80, 120, 160]);
+    let dir = write_files("refs", &[("g.png", &img)]);
+    let xml = scene_xml(
+        r#"<texture type="bitmap" id="g"><string name="filename" value="g.png"/><boolean name="raw" value="true"/></texture>
+        <shape type="sphere"><bsdf type="roughconductor"><ref name="alpha" id="g"/><ref name="specular_reflectance" id="g"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="blendbsdf">
+            <texture type="checkerboard" name="weight"><ref name="color0" id="g"/><float name="color1" value="0.25"/></texture>
+            <bsdf type="diffuse"/><bsdf type="roughdielectric"><ref name="alpha_u" id="g"/><float name="alpha_v" value="0.3"/></bsdf>
+        </bsdf></shape>
+        <shape type="sphere"><emitter type="area"><ref name="radiance" id="g"/></emitter></shape>"#,
+    );
+    let s = load_in(&dir, &xml, &[]).unwrap();
+    let Bsdf::RoughConductor(c) = first_bsdf(&s, 0) else { panic!() };
+    let rough = c.roughness.as_ref().expect("textured alpha");
+    assert!(rough.alpha_u == rough.alpha_v && rough.alpha_u == c.specular_reflectance);
+    let sp = at(0.375, 0.125); // texel (1, 0): 50/255
+    assert!((rough.alpha_u.eval_1(&sp) - 50.0 / 255.0).abs() < 1e-6);
+    assert!((c.distribution.at(&c.roughness, &sp).alpha_u - 50.0 / 255.0).abs() < 1e-6);
+    let Bsdf::Blend(b) = first_bsdf(&s, 1) else { panic!() };
+    let w = b.weight_texture.as_ref().expect("textured weight");
+    let Texture::Checkerboard(cb) = w else { panic!() };
+    assert!(cb.color0 == c.specular_reflectance);
+    let Bsdf::RoughDielectric(rd) = &b.bsdfs[1] else { panic!() };
+    let rt = rd.roughness.as_ref().unwrap();
+    assert_eq!(rt.alpha_v.eval_1(&sp), 0.3);
+    assert!(s.shapes[2].emission.as_ref().unwrap() == &c.specular_reflectance);
+}
+
+#[test]
+fn texture_errors() {
+    let img = png(2, 2, 1, &[0, 1, 2, 3]);
+    let dir = write_files("texerr", &[("g.png", &img), ("bad.png", b"\x89PNG garbage")]);
+    let case = |body: &str, needle: &str| {
+        expect_err(load_in(&dir, &scene_xml(body), &[]), needle);
+    };
+    let tex = |inner: &str| format!(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="g.png"/>{inner}</texture>"#);
+    case(
+        &format!(r#"<shape type="sphere"><bsdf type="diffuse">{}</bsdf></shape>"#, tex(r#"<string name="filter_type" value="cubic"/>"#)),
+        "invalid filter type \"cubic\"",
+    );
+    case(
+        &format!(r#"<shape type="sphere"><bsdf type="diffuse">{}</bsdf></shape>"#, tex(r#"<string name="wrap_mode" value="wrap"/>"#)),
+        "invalid wrap mode \"wrap\"",
+    );
+    case(
+        r#"<shape type="sphere"><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="nope.png"/></texture></bsdf></shape>"#,
+        "nope.png",
+    );
+    case(
+        r#"<shape type="sphere"><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="bad.png"/></texture></bsdf></shape>"#,
+        "cannot decode image",
+    );
+    case(
+        r#"<shape type="sphere"><bsdf type="diffuse"><texture type="noise" name="reflectance"/></bsdf></shape>"#,
+        "unsupported texture plugin type \"noise\"",
+    );
+    case(
+        &format!(r#"<shape type="sphere"><bsdf type="dielectric">{}</bsdf></shape>"#, tex("").replace("reflectance", "int_ior")),
+        "unexpected nested <texture type=\"bitmap\">",
+    );
+    case(
+        &format!(r#"<shape type="sphere"><bsdf type="roughplastic">{}</bsdf></shape>"#, tex("").replace("\"reflectance\"", "\"alpha\"")),
+        "the roughness must be a <float>",
+    );
+    case(
+        r#"<shape type="sphere"><bsdf type="bumpmap"><texture type="checkerboard" name="h"/><bsdf type="diffuse"/></bsdf></shape>"#,
+        "has no gradient",
+    );
+    case(
+        r#"<shape type="sphere"><bsdf type="normalmap"><bsdf type="diffuse"/></bsdf></shape>"#,
+        "\"normalmap\" (a texture) is required",
+    );
+    case(
+        &format!(r#"<shape type="sphere"><bsdf type="normalmap">{}</bsdf></shape>"#, tex("").replace("\"reflectance\"", "\"normalmap\"")),
+        "exactly one BSDF child",
+    );
+    case(
+        r#"<shape type="sphere"><bsdf type="diffuse"><bsdf type="diffuse" name="reflectance"/></bsdf></shape>"#,
+        "expected <rgb>, <float> or <texture>",
+    );
+}
+
+/// normalmap and bumpmap load with their nested model, options and texture.
+#[test]
+fn perturbing_adapters_load() {
+    let img = png(2, 2, 3, &[128, 128, 255, 200, 128, 220, 128, 128, 255, 128, 60, 230]);
+    let dir = write_files("perturb", &[("n.png", &img)]);
+    let xml = scene_xml(
+        r#"<shape type="sphere"><bsdf type="normalmap">
+            <texture type="bitmap" name="normalmap"><string name="filename" value="n.png"/><boolean name="raw" value="true"/></texture>
+            <boolean name="use_shadowing_function" value="false"/><bsdf type="diffuse"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="bumpmap">
+            <texture type="bitmap" name="anything"><string name="filename" value="n.png"/><boolean name="raw" value="true"/></texture>
+            <float name="scale" value="0.25"/><bsdf type="roughplastic"/></bsdf></shape>"#,
+    );
+    let s = load_in(&dir, &xml, &[]).unwrap();
+    let Bsdf::NormalMap(n) = first_bsdf(&s, 0) else { panic!() };
+    assert!(!n.options.use_shadowing_function && n.options.flip_invalid_normals);
+    assert!(matches!(*n.nested, Bsdf::Diffuse(_)));
+    let Bsdf::BumpMap(b) = first_bsdf(&s, 1) else { panic!() };
+    assert_eq!(b.scale, 0.25);
+    assert!(matches!(*b.nested, Bsdf::RoughPlastic(_)));
 }
