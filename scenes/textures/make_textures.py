@@ -8,6 +8,8 @@ reproducible byte for byte):  python3 scenes/textures/make_textures.py
   normals.png    64 x 64 RGB, linear (raw): a 4 x 4 grid of round bumps as tangent-space
                  normals n = 2 rgb - 1 (z up).
   height.png     64 x 64 grey, linear (raw): the same bumps as heights in [0, 1].
+  ../meshes/uv-panel.obj  a bulged 2 x 2 panel, z = 0.2 (1 - (x^2 + y^2) / 2), with smooth
+                 normals and a rotated, stretched uv layout (u along -y, v along x).
 """
 import math
 import os
@@ -91,7 +93,33 @@ def normals_and_height():
     write_png("height.png", 64, 64, 1, hrows)
 
 
+def uv_panel():
+    lines = ["# A bulged 2 x 2 panel with smooth normals and a rotated, stretched uv layout (u along -y,",
+             "# v along x) for scenes/textured.xml: mesh uv, dp/du, dp/dv and shading normals that",
+             "# differ from the face normals. Written by scenes/textures/make_textures.py."]
+    vs, vts, vns = [], [], []
+    for j in range(3):
+        for i in range(3):
+            x, y = i - 1, j - 1
+            vs.append((x, y, 0.2 * (1 - (x * x + y * y) / 2)))
+            vts.append(((1 - y) / 2, (x + 1) / 2 * 1.5))
+            n = (0.2 * x, 0.2 * y, 1.0)
+            length = math.sqrt(sum(c * c for c in n))
+            vns.append(tuple(c / length for c in n))
+    lines += ["v %g %g %g" % v for v in vs]
+    lines += ["vt %g %g" % t for t in vts]
+    lines += ["vn %.6f %.6f %.6f" % n for n in vns]
+    for j in range(2):
+        for i in range(2):
+            a = j * 3 + i + 1
+            for tri in ((a, a + 1, a + 4), (a, a + 4, a + 3)):
+                lines.append("f " + " ".join("%d/%d/%d" % (k, k, k) for k in tri))
+    with open(os.path.join(HERE, "..", "meshes", "uv-panel.obj"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
 if __name__ == "__main__":
+    uv_panel()
     tiles()
     roughness()
     normals_and_height()

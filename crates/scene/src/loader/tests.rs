@@ -1778,14 +1778,14 @@ fn loader_corrupted_inputs_never_panic() {
 
 /// An 8-bit PNG of `channels` (1 or 3) from raw bytes, row 0 at the top.
 fn png(width: u32, height: u32, channels: u8, bytes: &[u8]) -> Vec<u8> {
-    use image::ImageEncoder;
+    use ::image::ImageEncoder;
     let mut out = Vec::new();
     let color = if channels == 1 {
-        image::ExtendedColorType::L8
+        ::image::ExtendedColorType::L8
     } else {
-        image::ExtendedColorType::Rgb8
+        ::image::ExtendedColorType::Rgb8
     };
-    image::codecs::png::PngEncoder::new(&mut out)
+    ::image::codecs::png::PngEncoder::new(&mut out)
         .write_image(bytes, width, height, color)
         .expect("encode png");
     out
