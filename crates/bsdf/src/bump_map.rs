@@ -93,23 +93,41 @@ mod tests {
     /// A 2×2 height field, bilinear: at uv (0, 0) (the SP of the test harness) its gradient
     /// is (−1.6, 0.8) per unit of uv.
     fn heights() -> Texture {
-        Bitmap::new(2, 2, 1, vec![0.0, 0.4, 0.2, 1.0], FilterType::Bilinear, WrapMode::Repeat, UvTransform::IDENTITY)
-            .unwrap()
-            .into()
+        Bitmap::new(
+            2,
+            2,
+            1,
+            vec![0.0, 0.4, 0.2, 1.0],
+            FilterType::Bilinear,
+            WrapMode::Repeat,
+            UvTransform::IDENTITY,
+        )
+        .unwrap()
+        .into()
     }
 
     #[test]
     fn bumped_normal_follows_the_gradient() {
         let h = heights();
         let g = h.eval_1_grad(&SP).unwrap();
-        let b = BumpMap::new(h, 0.5, Bsdf::Diffuse(Diffuse::new(Spectrum::ONE)), PerturbOptions::default());
+        let b = BumpMap::new(
+            h,
+            0.5,
+            Bsdf::Diffuse(Diffuse::new(Spectrum::ONE)),
+            PerturbOptions::default(),
+        );
         let f = b.frame(&SP, dir(0.9, 0.0)).unwrap();
         // dp/du' = (1, 0, gu), dp/dv' = (0, 1, gv): n ∝ (−gu, −gv, 1).
         let want = Vec3::new(-0.5 * g.x, -0.5 * g.y, 1.0).normalize();
         assert!((f.n - want).length() < 1e-5, "{:?} vs {want}", f.n);
         assert!(g.length() > 0.1);
         // Zero scale: the shading frame itself.
-        let flat = BumpMap::new(heights(), 0.0, Bsdf::Diffuse(Diffuse::new(Spectrum::ONE)), PerturbOptions::default());
+        let flat = BumpMap::new(
+            heights(),
+            0.0,
+            Bsdf::Diffuse(Diffuse::new(Spectrum::ONE)),
+            PerturbOptions::default(),
+        );
         assert!((flat.frame(&SP, dir(0.9, 0.0)).unwrap().n - Vec3::Z).length() < 1e-6);
     }
 

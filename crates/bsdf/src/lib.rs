@@ -89,8 +89,8 @@ pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
 pub use rough_plastic::RoughPlastic;
 pub use texture::{
-    decode_8bit, srgb_to_linear, Bitmap, BitmapError, Checkerboard, FilterType, Texture, UvTransform,
-    WrapMode,
+    decode_8bit, srgb_to_linear, Bitmap, BitmapError, Checkerboard, FilterType, Texture,
+    UvTransform, WrapMode,
 };
 pub use thin_dielectric::ThinDielectric;
 pub use twosided::TwoSided;
@@ -421,8 +421,16 @@ mod tests {
             )),
             _ => {
                 let data: Vec<f32> = (0..4).map(|_| rng.random()).collect();
-                let height = Bitmap::new(2, 2, 1, data, FilterType::Bilinear, WrapMode::Repeat, UvTransform::IDENTITY)
-                    .expect("valid bitmap");
+                let height = Bitmap::new(
+                    2,
+                    2,
+                    1,
+                    data,
+                    FilterType::Bilinear,
+                    WrapMode::Repeat,
+                    UvTransform::IDENTITY,
+                )
+                .expect("valid bitmap");
                 Bsdf::BumpMap(BumpMap::new(
                     height.into(),
                     log_uniform(rng, 1e-3, 1e3),

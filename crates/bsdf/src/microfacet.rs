@@ -76,11 +76,7 @@ impl MicrofacetDistribution {
     /// strategy kept, α clamped as [`MicrofacetDistribution::new`] does). Without textures
     /// it is a copy: the constant path costs one branch.
     #[inline]
-    pub fn at(
-        &self,
-        textures: &Option<Box<RoughnessTextures>>,
-        sp: &crate::ShadingPoint,
-    ) -> Self {
+    pub fn at(&self, textures: &Option<Box<RoughnessTextures>>, sp: &crate::ShadingPoint) -> Self {
         match textures {
             None => *self,
             Some(t) => Self::new(

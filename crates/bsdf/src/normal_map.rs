@@ -75,8 +75,8 @@ mod tests {
     use crate::microfacet::MicrofacetType;
     use crate::perturbed::shadow_terminator;
     use crate::testing::*;
-    use crate::{Diffuse, RoughConductor};
     use crate::MicrofacetDistribution;
+    use crate::{Diffuse, RoughConductor};
 
     /// A normal map that tilts every normal by about 27° (constant colour).
     fn tilted(nested: Bsdf, options: PerturbOptions) -> Bsdf {
@@ -94,7 +94,12 @@ mod tests {
             ("diffuse", Bsdf::Diffuse(Diffuse::new(Spectrum::splat(0.8)))),
             (
                 "roughconductor",
-                Bsdf::RoughConductor(RoughConductor::new(d, Spectrum::ZERO, Spectrum::ONE, Spectrum::ONE)),
+                Bsdf::RoughConductor(RoughConductor::new(
+                    d,
+                    Spectrum::ZERO,
+                    Spectrum::ONE,
+                    Spectrum::ONE,
+                )),
             ),
         ]
     }
@@ -106,7 +111,10 @@ mod tests {
         for (name, nested) in nested_models() {
             for options in [
                 PerturbOptions::default(),
-                PerturbOptions { flip_invalid_normals: false, use_shadowing_function: false },
+                PerturbOptions {
+                    flip_invalid_normals: false,
+                    use_shadowing_function: false,
+                },
             ] {
                 let b = tilted(nested.clone(), options);
                 for wi in incident_directions(false) {
@@ -123,7 +131,10 @@ mod tests {
     /// would let the nested BSDF see it above its own horizon.
     #[test]
     fn no_leaks_below_the_surface() {
-        let b = tilted(Bsdf::Diffuse(Diffuse::new(Spectrum::ONE)), PerturbOptions::default());
+        let b = tilted(
+            Bsdf::Diffuse(Diffuse::new(Spectrum::ONE)),
+            PerturbOptions::default(),
+        );
         let wi = dir(0.7, 0.4);
         for_each_sample(20_000, 7, |u, u1| {
             let wo = dir(-u.x, 6.28 * u.y);
@@ -166,7 +177,11 @@ mod tests {
         // wi grazing from −x: wi · n < 0.
         let wi = Vec3::new(-0.99, 0.0, 0.141).normalize();
         let f = m.frame(&SP, wi).unwrap();
-        assert!((f.n - Vec3::new(-0.8, 0.0, 0.6)).length() < 1e-5, "{:?}", f.n);
+        assert!(
+            (f.n - Vec3::new(-0.8, 0.0, 0.6)).length() < 1e-5,
+            "{:?}",
+            f.n
+        );
         let f = m.frame(&SP, dir(0.9, 0.0)).unwrap();
         assert!((f.n - n).length() < 1e-5);
     }

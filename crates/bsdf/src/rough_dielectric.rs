@@ -81,7 +81,10 @@ fn half_vector(
 
 /// The distribution normals are sampled from (Walter's widening without visible normals).
 #[inline]
-fn sampling_distribution(dist: &MicrofacetDistribution, cos_theta_i: f32) -> MicrofacetDistribution {
+fn sampling_distribution(
+    dist: &MicrofacetDistribution,
+    cos_theta_i: f32,
+) -> MicrofacetDistribution {
     if dist.sample_visible {
         *dist
     } else {
@@ -211,8 +214,7 @@ impl RoughDielectric {
         let g = if dist.sample_visible {
             // G/G1(wi) with the exact G1 of the visible-normal density: Mitsuba's G1(wo) for
             // GGX (see `MicrofacetDistribution::visible_g1` for Beckmann).
-            dist.g(wi, wo, m, Shadowing::Separable)
-                / dist.visible_g1(mulsign(wi, cos_i), m)
+            dist.g(wi, wo, m, Shadowing::Separable) / dist.visible_g1(mulsign(wi, cos_i), m)
         } else {
             // Walter et al.'s weight G (wi·m)/(cos θi cos θm) assumes normals drawn from D
             // itself; with the widened sampling distribution D' it needs D(m)/D'(m) too.

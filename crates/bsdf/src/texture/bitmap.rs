@@ -28,8 +28,8 @@
 //! * `mean()` is the mean over texels of the luminance (three channels) or of the value
 //!   (one channel).
 
-use radia_math::{luminance, Spectrum};
 use glam::Vec2;
+use radia_math::{luminance, Spectrum};
 
 use super::UvTransform;
 
@@ -137,14 +137,18 @@ impl Bitmap {
         to_uv: UvTransform,
     ) -> Result<Self, BitmapError> {
         if width == 0 || height == 0 {
-            return Err(BitmapError(format!("the image is empty ({width}×{height})")));
+            return Err(BitmapError(format!(
+                "the image is empty ({width}×{height})"
+            )));
         }
         if channels != 1 && channels != 3 {
             return Err(BitmapError(format!(
                 "a texture needs 1 or 3 channels, the image has {channels}"
             )));
         }
-        let expected = width.checked_mul(height).and_then(|n| n.checked_mul(channels));
+        let expected = width
+            .checked_mul(height)
+            .and_then(|n| n.checked_mul(channels));
         if expected != Some(data.len()) {
             return Err(BitmapError(format!(
                 "{width}×{height} texels of {channels} channel(s) need {} values, got {}",
@@ -165,10 +169,7 @@ impl Bitmap {
         }
         let (width, height, data) = pad_to_2x2(width, height, channels, data);
         let texels = width * height;
-        let sum: f64 = data
-            .chunks_exact(channels)
-            .map(|t| texel_1(t) as f64)
-            .sum();
+        let sum: f64 = data.chunks_exact(channels).map(|t| texel_1(t) as f64).sum();
         let max = data.iter().fold(f32::NEG_INFINITY, |m, &x| m.max(x));
         Ok(Self {
             width,
@@ -299,8 +300,10 @@ impl Bitmap {
             FilterType::Bilinear => {
                 let ([c00, c10, c01, c11], w1) = self.corners(uv);
                 let w0 = Vec2::ONE - w1;
-                let row0 = self.texel_rgb(c00.0, c00.1) * w0.x + self.texel_rgb(c10.0, c10.1) * w1.x;
-                let row1 = self.texel_rgb(c01.0, c01.1) * w0.x + self.texel_rgb(c11.0, c11.1) * w1.x;
+                let row0 =
+                    self.texel_rgb(c00.0, c00.1) * w0.x + self.texel_rgb(c10.0, c10.1) * w1.x;
+                let row1 =
+                    self.texel_rgb(c01.0, c01.1) * w0.x + self.texel_rgb(c11.0, c11.1) * w1.x;
                 row0 * w0.y + row1 * w1.y
             }
         }
@@ -391,13 +394,28 @@ mod tests {
     use super::*;
 
     fn grey(width: usize, height: usize, v: &[f32], filter: FilterType, wrap: WrapMode) -> Bitmap {
-        Bitmap::new(width, height, 1, v.to_vec(), filter, wrap, UvTransform::IDENTITY).unwrap()
+        Bitmap::new(
+            width,
+            height,
+            1,
+            v.to_vec(),
+            filter,
+            wrap,
+            UvTransform::IDENTITY,
+        )
+        .unwrap()
     }
 
     /// Texel centres return the texel's value exactly; halfway between two centres the mean.
     #[test]
     fn bilinear_hits_texel_centres() {
-        let b = grey(4, 2, &[0., 1., 2., 3., 4., 5., 6., 7.], FilterType::Bilinear, WrapMode::Clamp);
+        let b = grey(
+            4,
+            2,
+            &[0., 1., 2., 3., 4., 5., 6., 7.],
+            FilterType::Bilinear,
+            WrapMode::Clamp,
+        );
         for y in 0..2 {
             for x in 0..4 {
                 let uv = Vec2::new((x as f32 + 0.5) / 4.0, (y as f32 + 0.5) / 2.0);
@@ -413,7 +431,13 @@ mod tests {
 
     #[test]
     fn nearest_takes_the_texel_under_uv() {
-        let b = grey(4, 1, &[0., 1., 2., 3.], FilterType::Nearest, WrapMode::Repeat);
+        let b = grey(
+            4,
+            1,
+            &[0., 1., 2., 3.],
+            FilterType::Nearest,
+            WrapMode::Repeat,
+        );
         assert_eq!(b.eval_1(Vec2::new(0.0, 0.5)), 0.0);
         assert_eq!(b.eval_1(Vec2::new(0.2499, 0.5)), 0.0);
         assert_eq!(b.eval_1(Vec2::new(0.25, 0.5)), 1.0);
@@ -447,12 +471,19 @@ mod tests {
         for mode in [WrapMode::Repeat, WrapMode::Mirror, WrapMode::Clamp] {
             for res in 1..6 {
                 for pos in -25..25 {
-                    assert_eq!(mode.wrap(pos, res) as i64, drjit(mode, pos, res), "{mode:?} {pos} {res}");
+                    assert_eq!(
+                        mode.wrap(pos, res) as i64,
+                        drjit(mode, pos, res),
+                        "{mode:?} {pos} {res}"
+                    );
                 }
             }
         }
         // Mirror reflects: with 3 texels, -1 → 0, -3 → 2, 3 → 2, 5 → 0, 6 → 0.
-        let m: Vec<usize> = [-1, -3, 3, 5, 6].iter().map(|&i| WrapMode::Mirror.wrap(i, 3)).collect();
+        let m: Vec<usize> = [-1, -3, 3, 5, 6]
+            .iter()
+            .map(|&i| WrapMode::Mirror.wrap(i, 3))
+            .collect();
         assert_eq!(m, vec![0, 2, 2, 0, 0]);
     }
 
@@ -496,7 +527,16 @@ mod tests {
     #[test]
     fn srgb_is_decoded_before_filtering() {
         let data = decode_8bit(&[0, 255], false);
-        let b = Bitmap::new(2, 1, 1, data, FilterType::Bilinear, WrapMode::Clamp, UvTransform::IDENTITY).unwrap();
+        let b = Bitmap::new(
+            2,
+            1,
+            1,
+            data,
+            FilterType::Bilinear,
+            WrapMode::Clamp,
+            UvTransform::IDENTITY,
+        )
+        .unwrap();
         assert!((b.eval_1(Vec2::new(0.5, 0.5)) - 0.5).abs() < 1e-6);
     }
 
@@ -526,10 +566,28 @@ mod tests {
     #[test]
     fn uv_transform() {
         let v: Vec<f32> = (0..4).map(|x| x as f32).collect();
-        let scaled = Bitmap::new(4, 1, 1, v.clone(), FilterType::Nearest, WrapMode::Repeat, UvTransform::from_scale(Vec2::new(2.0, 1.0))).unwrap();
+        let scaled = Bitmap::new(
+            4,
+            1,
+            1,
+            v.clone(),
+            FilterType::Nearest,
+            WrapMode::Repeat,
+            UvTransform::from_scale(Vec2::new(2.0, 1.0)),
+        )
+        .unwrap();
         assert_eq!(scaled.eval_1(Vec2::new(0.55, 0.5)), 0.0);
         assert_eq!(scaled.eval_1(Vec2::new(0.2, 0.5)), 1.0);
-        let shifted = Bitmap::new(4, 1, 1, v, FilterType::Nearest, WrapMode::Repeat, UvTransform::from_translation(Vec2::new(0.25, 0.0))).unwrap();
+        let shifted = Bitmap::new(
+            4,
+            1,
+            1,
+            v,
+            FilterType::Nearest,
+            WrapMode::Repeat,
+            UvTransform::from_translation(Vec2::new(0.25, 0.0)),
+        )
+        .unwrap();
         assert_eq!(shifted.eval_1(Vec2::new(0.1, 0.5)), 1.0);
     }
 
@@ -538,14 +596,35 @@ mod tests {
     #[test]
     fn gradient_matches_finite_differences() {
         let v: Vec<f32> = (0..16).map(|i| ((i * 7) % 5) as f32 * 0.25).collect();
-        for to_uv in [UvTransform::IDENTITY, UvTransform::from_scale(Vec2::new(3.0, 0.5))] {
-            let b = Bitmap::new(4, 4, 1, v.clone(), FilterType::Bilinear, WrapMode::Repeat, to_uv).unwrap();
-            for uv in [Vec2::new(0.3, 0.4), Vec2::new(0.61, 0.17), Vec2::new(0.05, 0.93)] {
+        for to_uv in [
+            UvTransform::IDENTITY,
+            UvTransform::from_scale(Vec2::new(3.0, 0.5)),
+        ] {
+            let b = Bitmap::new(
+                4,
+                4,
+                1,
+                v.clone(),
+                FilterType::Bilinear,
+                WrapMode::Repeat,
+                to_uv,
+            )
+            .unwrap();
+            for uv in [
+                Vec2::new(0.3, 0.4),
+                Vec2::new(0.61, 0.17),
+                Vec2::new(0.05, 0.93),
+            ] {
                 let g = b.eval_1_grad(uv);
                 let h = 1e-3;
-                let du = (b.eval_1(uv + Vec2::new(h, 0.0)) - b.eval_1(uv - Vec2::new(h, 0.0))) / (2.0 * h);
-                let dv = (b.eval_1(uv + Vec2::new(0.0, h)) - b.eval_1(uv - Vec2::new(0.0, h))) / (2.0 * h);
-                assert!((g.x - du).abs() < 2e-2 && (g.y - dv).abs() < 2e-2, "{uv}: {g} vs ({du}, {dv})");
+                let du = (b.eval_1(uv + Vec2::new(h, 0.0)) - b.eval_1(uv - Vec2::new(h, 0.0)))
+                    / (2.0 * h);
+                let dv = (b.eval_1(uv + Vec2::new(0.0, h)) - b.eval_1(uv - Vec2::new(0.0, h)))
+                    / (2.0 * h);
+                assert!(
+                    (g.x - du).abs() < 2e-2 && (g.y - dv).abs() < 2e-2,
+                    "{uv}: {g} vs ({du}, {dv})"
+                );
             }
         }
     }
@@ -561,14 +640,38 @@ mod tests {
 
     #[test]
     fn bad_data_is_an_error_not_a_panic() {
-        let mk = |w, h, c, n: usize| Bitmap::new(w, h, c, vec![0.5; n], FilterType::Bilinear, WrapMode::Repeat, UvTransform::IDENTITY);
+        let mk = |w, h, c, n: usize| {
+            Bitmap::new(
+                w,
+                h,
+                c,
+                vec![0.5; n],
+                FilterType::Bilinear,
+                WrapMode::Repeat,
+                UvTransform::IDENTITY,
+            )
+        };
         assert!(mk(0, 4, 1, 0).is_err());
         assert!(mk(2, 2, 2, 8).is_err());
         assert!(mk(2, 2, 3, 11).is_err());
-        let nan = Bitmap::new(1, 1, 1, vec![f32::NAN], FilterType::Bilinear, WrapMode::Repeat, UvTransform::IDENTITY);
+        let nan = Bitmap::new(
+            1,
+            1,
+            1,
+            vec![f32::NAN],
+            FilterType::Bilinear,
+            WrapMode::Repeat,
+            UvTransform::IDENTITY,
+        );
         assert!(nan.unwrap_err().0.contains("not finite"));
         // Non-finite uv: no panic, a finite value.
-        let b = grey(2, 2, &[1., 2., 3., 4.], FilterType::Bilinear, WrapMode::Mirror);
+        let b = grey(
+            2,
+            2,
+            &[1., 2., 3., 4.],
+            FilterType::Bilinear,
+            WrapMode::Mirror,
+        );
         for uv in [Vec2::NAN, Vec2::splat(f32::INFINITY), Vec2::splat(-1e30)] {
             assert!(b.eval_1(uv).is_finite());
             assert!(b.eval_1_grad(uv).is_finite());

@@ -78,7 +78,11 @@ mod tests {
 
     #[test]
     fn pattern_and_swapped_eval_1() {
-        let c = Checkerboard::new(Spectrum::splat(0.4), Spectrum::splat(0.2), UvTransform::IDENTITY);
+        let c = Checkerboard::new(
+            Spectrum::splat(0.4),
+            Spectrum::splat(0.2),
+            UvTransform::IDENTITY,
+        );
         assert_eq!(c.eval(&at(0.25, 0.25)), Spectrum::splat(0.4));
         assert_eq!(c.eval(&at(0.75, 0.75)), Spectrum::splat(0.4));
         assert_eq!(c.eval(&at(0.75, 0.25)), Spectrum::splat(0.2));

@@ -18,9 +18,10 @@ use radia_bsdf::ior::{
 };
 use radia_bsdf::microfacet::{RoughnessTextures, Shadowing};
 use radia_bsdf::{
-    Blend, BlinnPhong, Bsdf, Conductor, CookTorrance, CookTorranceFresnel, Dielectric, Diffuse,
-    BumpMap, LobeFlags, MicrofacetDistribution, MicrofacetType, NormalMap, PerturbOptions,
-    Phong, Plastic, RoughConductor, ShadingPoint, RoughDielectric, RoughPlastic, Texture, ThinDielectric, TwoSided,
+    Blend, BlinnPhong, Bsdf, BumpMap, Conductor, CookTorrance, CookTorranceFresnel, Dielectric,
+    Diffuse, LobeFlags, MicrofacetDistribution, MicrofacetType, NormalMap, PerturbOptions, Phong,
+    Plastic, RoughConductor, RoughDielectric, RoughPlastic, ShadingPoint, Texture, ThinDielectric,
+    TwoSided,
 };
 
 /// Nested BSDFs (twosided of twosided ...) deeper than this are refused.
@@ -289,7 +290,6 @@ fn shadowing(p: &mut Props<'_>) -> Result<Shadowing, LoadError> {
     })
 }
 
-
 // ---------------------------------------------------------------------------------------------
 // Conductors
 // ---------------------------------------------------------------------------------------------
@@ -410,7 +410,9 @@ fn plastic(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadError> {
     let s = texture_param(b, &mut p, "specular_reflectance", 1.0, true)?;
     let nonlinear = p.boolean("nonlinear", false)?;
     p.finish()?;
-    Ok(Bsdf::Plastic(Plastic::new(int_ior, ext_ior, d, s, nonlinear)))
+    Ok(Bsdf::Plastic(Plastic::new(
+        int_ior, ext_ior, d, s, nonlinear,
+    )))
 }
 
 /// `roughplastic` (`src/bsdfs/roughplastic.cpp`): Beckmann α 0.1, isotropic only.
@@ -429,14 +431,7 @@ fn rough_plastic(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadErro
     }
     p.finish()?;
     Ok(Bsdf::RoughPlastic(RoughPlastic::new(
-        kind,
-        au,
-        visible,
-        int_ior,
-        ext_ior,
-        d,
-        s,
-        nonlinear,
+        kind, au, visible, int_ior, ext_ior, d, s, nonlinear,
     )))
 }
 
@@ -587,7 +582,11 @@ fn normal_map(b: &mut Builder<'_>, mut p: Props<'_>, nesting: usize) -> Result<B
     }
     let normals = texture_param(b, &mut p, "normalmap", 0.5, true)?;
     p.finish()?;
-    Ok(Bsdf::NormalMap(NormalMap::new(normals, nested_bsdf, options)))
+    Ok(Bsdf::NormalMap(NormalMap::new(
+        normals,
+        nested_bsdf,
+        options,
+    )))
 }
 
 /// `bumpmap` (`src/bsdfs/bumpmap.cpp`): one nested texture of any name (the height), one
@@ -623,7 +622,12 @@ fn bump_map(b: &mut Builder<'_>, mut p: Props<'_>, nesting: usize) -> Result<Bsd
         return Err(p.err_at(p.pos_of("scale"), "bumpmap: scale must be finite"));
     }
     p.finish()?;
-    Ok(Bsdf::BumpMap(BumpMap::new(height, scale as f32, nested_bsdf, options)))
+    Ok(Bsdf::BumpMap(BumpMap::new(
+        height,
+        scale as f32,
+        nested_bsdf,
+        options,
+    )))
 }
 
 #[cfg(test)]

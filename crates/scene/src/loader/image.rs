@@ -95,7 +95,9 @@ pub(crate) fn read_texture_image(path: &Path, raw: bool) -> Result<TextureImage,
     };
     // Keep the first `keep` of every `stride` samples (drops alpha).
     fn take<T: Copy>(v: &[T], stride: usize, keep: usize) -> Vec<T> {
-        v.chunks_exact(stride).flat_map(|c| c[..keep].iter().copied()).collect()
+        v.chunks_exact(stride)
+            .flat_map(|c| c[..keep].iter().copied())
+            .collect()
     }
     let (channels, data) = match &img {
         D::ImageLuma8(i) => (1, radia_bsdf::decode_8bit(i.as_raw(), raw)),
@@ -103,9 +105,15 @@ pub(crate) fn read_texture_image(path: &Path, raw: bool) -> Result<TextureImage,
         D::ImageRgb8(i) => (3, radia_bsdf::decode_8bit(i.as_raw(), raw)),
         D::ImageRgba8(i) => (3, radia_bsdf::decode_8bit(&take(i.as_raw(), 4, 3), raw)),
         D::ImageLuma16(i) => (1, i.as_raw().iter().map(|&v| decode16(v)).collect()),
-        D::ImageLumaA16(i) => (1, take(i.as_raw(), 2, 1).into_iter().map(decode16).collect()),
+        D::ImageLumaA16(i) => (
+            1,
+            take(i.as_raw(), 2, 1).into_iter().map(decode16).collect(),
+        ),
         D::ImageRgb16(i) => (3, i.as_raw().iter().map(|&v| decode16(v)).collect()),
-        D::ImageRgba16(i) => (3, take(i.as_raw(), 4, 3).into_iter().map(decode16).collect()),
+        D::ImageRgba16(i) => (
+            3,
+            take(i.as_raw(), 4, 3).into_iter().map(decode16).collect(),
+        ),
         D::ImageRgb32F(i) => (3, i.as_raw().clone()),
         D::ImageRgba32F(i) => (3, take(i.as_raw(), 4, 3)),
         other => (3, other.to_rgb32f().into_raw()),

@@ -1815,15 +1815,29 @@ fn bitmap_texture_parameters() {
         </texture></bsdf></shape>"#,
     );
     let s = load_in(&dir, &xml, &[]).unwrap();
-    let Bsdf::Diffuse(d) = first_bsdf(&s, 0) else { panic!() };
+    let Bsdf::Diffuse(d) = first_bsdf(&s, 0) else {
+        panic!()
+    };
     assert!(matches!(d.reflectance, Texture::Bitmap(_)));
     let grey = radia_bsdf::srgb_to_linear(188.0 / 255.0);
-    assert!((d.reflectance.eval(&at(0.75, 0.75)) - Vec3::splat(grey)).abs().max_element() < 1e-6);
+    assert!(
+        (d.reflectance.eval(&at(0.75, 0.75)) - Vec3::splat(grey))
+            .abs()
+            .max_element()
+            < 1e-6
+    );
     assert_eq!(d.reflectance.eval(&at(0.25, 0.25)), Vec3::X);
     assert_eq!(d.reflectance.eval(&at(0.75, 0.25)), Vec3::Y);
-    let Bsdf::Diffuse(r) = first_bsdf(&s, 1) else { panic!() };
+    let Bsdf::Diffuse(r) = first_bsdf(&s, 1) else {
+        panic!()
+    };
     // uv' = (2u + 0.5, v): u = 0.3 → 1.1, mirrored into texel 1 of row 1 (raw 188/255).
-    assert!((r.reflectance.eval(&at(0.3, 0.7)) - Vec3::splat(188.0 / 255.0)).abs().max_element() < 1e-6);
+    assert!(
+        (r.reflectance.eval(&at(0.3, 0.7)) - Vec3::splat(188.0 / 255.0))
+            .abs()
+            .max_element()
+            < 1e-6
+    );
     // u = 0.05 → 0.6, texel 1 of row 0: green.
     assert_eq!(r.reflectance.eval(&at(0.05, 0.2)), Vec3::Y);
 }
@@ -1832,7 +1846,14 @@ fn bitmap_texture_parameters() {
 /// a texture; alpha, blend weights and area radiance take textures.
 #[test]
 fn texture_refs_and_parameters() {
-    let img = png(4, 4, 1, &[10, 50, 90, 130, 20, 60, 100, 140, 30, 70, 110, 150, 40, 80, 120, 160]);
+    let img = png(
+        4,
+        4,
+        1,
+        &[
+            10, 50, 90, 130, 20, 60, 100, 140, 30, 70, 110, 150, 40, 80, 120, 160,
+        ],
+    );
     let dir = write_files("refs", &[("g.png", &img)]);
     let xml = scene_xml(
         r#"<texture type="bitmap" id="g"><string name="filename" value="g.png"/><boolean name="raw" value="true"/></texture>
@@ -1844,17 +1865,25 @@ fn texture_refs_and_parameters() {
         <shape type="sphere"><emitter type="area"><ref name="radiance" id="g"/></emitter></shape>"#,
     );
     let s = load_in(&dir, &xml, &[]).unwrap();
-    let Bsdf::RoughConductor(c) = first_bsdf(&s, 0) else { panic!() };
+    let Bsdf::RoughConductor(c) = first_bsdf(&s, 0) else {
+        panic!()
+    };
     let rough = c.roughness.as_ref().expect("textured alpha");
     assert!(rough.alpha_u == rough.alpha_v && rough.alpha_u == c.specular_reflectance);
     let sp = at(0.375, 0.125); // texel (1, 0): 50/255
     assert!((rough.alpha_u.eval_1(&sp) - 50.0 / 255.0).abs() < 1e-6);
     assert!((c.distribution.at(&c.roughness, &sp).alpha_u - 50.0 / 255.0).abs() < 1e-6);
-    let Bsdf::Blend(b) = first_bsdf(&s, 1) else { panic!() };
+    let Bsdf::Blend(b) = first_bsdf(&s, 1) else {
+        panic!()
+    };
     let w = b.weight_texture.as_ref().expect("textured weight");
-    let Texture::Checkerboard(cb) = w else { panic!() };
+    let Texture::Checkerboard(cb) = w else {
+        panic!()
+    };
     assert!(cb.color0 == c.specular_reflectance);
-    let Bsdf::RoughDielectric(rd) = &b.bsdfs[1] else { panic!() };
+    let Bsdf::RoughDielectric(rd) = &b.bsdfs[1] else {
+        panic!()
+    };
     let rt = rd.roughness.as_ref().unwrap();
     assert_eq!(rt.alpha_v.eval_1(&sp), 0.3);
     assert!(s.shapes[2].emission.as_ref().unwrap() == &c.specular_reflectance);
@@ -1863,17 +1892,30 @@ fn texture_refs_and_parameters() {
 #[test]
 fn texture_errors() {
     let img = png(2, 2, 1, &[0, 1, 2, 3]);
-    let dir = write_files("texerr", &[("g.png", &img), ("bad.png", b"\x89PNG garbage")]);
+    let dir = write_files(
+        "texerr",
+        &[("g.png", &img), ("bad.png", b"\x89PNG garbage")],
+    );
     let case = |body: &str, needle: &str| {
         expect_err(load_in(&dir, &scene_xml(body), &[]), needle);
     };
-    let tex = |inner: &str| format!(r#"<texture type="bitmap" name="reflectance"><string name="filename" value="g.png"/>{inner}</texture>"#);
+    let tex = |inner: &str| {
+        format!(
+            r#"<texture type="bitmap" name="reflectance"><string name="filename" value="g.png"/>{inner}</texture>"#
+        )
+    };
     case(
-        &format!(r#"<shape type="sphere"><bsdf type="diffuse">{}</bsdf></shape>"#, tex(r#"<string name="filter_type" value="cubic"/>"#)),
+        &format!(
+            r#"<shape type="sphere"><bsdf type="diffuse">{}</bsdf></shape>"#,
+            tex(r#"<string name="filter_type" value="cubic"/>"#)
+        ),
         "invalid filter type \"cubic\"",
     );
     case(
-        &format!(r#"<shape type="sphere"><bsdf type="diffuse">{}</bsdf></shape>"#, tex(r#"<string name="wrap_mode" value="wrap"/>"#)),
+        &format!(
+            r#"<shape type="sphere"><bsdf type="diffuse">{}</bsdf></shape>"#,
+            tex(r#"<string name="wrap_mode" value="wrap"/>"#)
+        ),
         "invalid wrap mode \"wrap\"",
     );
     case(
@@ -1889,11 +1931,17 @@ fn texture_errors() {
         "unsupported texture plugin type \"noise\"",
     );
     case(
-        &format!(r#"<shape type="sphere"><bsdf type="dielectric">{}</bsdf></shape>"#, tex("").replace("reflectance", "int_ior")),
+        &format!(
+            r#"<shape type="sphere"><bsdf type="dielectric">{}</bsdf></shape>"#,
+            tex("").replace("reflectance", "int_ior")
+        ),
         "unexpected nested <texture type=\"bitmap\">",
     );
     case(
-        &format!(r#"<shape type="sphere"><bsdf type="roughplastic">{}</bsdf></shape>"#, tex("").replace("\"reflectance\"", "\"alpha\"")),
+        &format!(
+            r#"<shape type="sphere"><bsdf type="roughplastic">{}</bsdf></shape>"#,
+            tex("").replace("\"reflectance\"", "\"alpha\"")
+        ),
         "the roughness must be a <float>",
     );
     case(
@@ -1905,7 +1953,10 @@ fn texture_errors() {
         "\"normalmap\" (a texture) is required",
     );
     case(
-        &format!(r#"<shape type="sphere"><bsdf type="normalmap">{}</bsdf></shape>"#, tex("").replace("\"reflectance\"", "\"normalmap\"")),
+        &format!(
+            r#"<shape type="sphere"><bsdf type="normalmap">{}</bsdf></shape>"#,
+            tex("").replace("\"reflectance\"", "\"normalmap\"")
+        ),
         "exactly one BSDF child",
     );
     case(
@@ -1917,7 +1968,12 @@ fn texture_errors() {
 /// normalmap and bumpmap load with their nested model, options and texture.
 #[test]
 fn perturbing_adapters_load() {
-    let img = png(2, 2, 3, &[128, 128, 255, 200, 128, 220, 128, 128, 255, 128, 60, 230]);
+    let img = png(
+        2,
+        2,
+        3,
+        &[128, 128, 255, 200, 128, 220, 128, 128, 255, 128, 60, 230],
+    );
     let dir = write_files("perturb", &[("n.png", &img)]);
     let xml = scene_xml(
         r#"<shape type="sphere"><bsdf type="normalmap">
@@ -1928,10 +1984,14 @@ fn perturbing_adapters_load() {
             <float name="scale" value="0.25"/><bsdf type="roughplastic"/></bsdf></shape>"#,
     );
     let s = load_in(&dir, &xml, &[]).unwrap();
-    let Bsdf::NormalMap(n) = first_bsdf(&s, 0) else { panic!() };
+    let Bsdf::NormalMap(n) = first_bsdf(&s, 0) else {
+        panic!()
+    };
     assert!(!n.options.use_shadowing_function && n.options.flip_invalid_normals);
     assert!(matches!(*n.nested, Bsdf::Diffuse(_)));
-    let Bsdf::BumpMap(b) = first_bsdf(&s, 1) else { panic!() };
+    let Bsdf::BumpMap(b) = first_bsdf(&s, 1) else {
+        panic!()
+    };
     assert_eq!(b.scale, 0.25);
     assert!(matches!(*b.nested, Bsdf::RoughPlastic(_)));
 }

@@ -53,7 +53,9 @@ fn texture_param_nested(
         p.take(i);
         return build_texture(b, n, nesting + 1);
     }
-    Ok(Texture::Constant(p.color(name, default, bounded)?.as_vec3()))
+    Ok(Texture::Constant(
+        p.color(name, default, bounded)?.as_vec3(),
+    ))
 }
 
 /// Builds the texture of node `idx` (cached: a referenced texture is built once).
@@ -111,16 +113,17 @@ fn bitmap(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Texture, LoadError> {
     let raw = p.boolean("raw", false)?;
     let _ = p.boolean("accel", true)?;
     let filter_pos = p.pos_of("filter_type");
-    let filter = match p.string_opt("filter_type")?.unwrap_or("bilinear") {
-        "bilinear" => FilterType::Bilinear,
-        "nearest" => FilterType::Nearest,
-        other => {
-            return Err(p.err_at(
+    let filter =
+        match p.string_opt("filter_type")?.unwrap_or("bilinear") {
+            "bilinear" => FilterType::Bilinear,
+            "nearest" => FilterType::Nearest,
+            other => return Err(p.err_at(
                 filter_pos,
-                format!("invalid filter type \"{other}\", must be one of: \"nearest\", or \"bilinear\""),
-            ))
-        }
-    };
+                format!(
+                    "invalid filter type \"{other}\", must be one of: \"nearest\", or \"bilinear\""
+                ),
+            )),
+        };
     let wrap_pos = p.pos_of("wrap_mode");
     let wrap = match p.string_opt("wrap_mode")?.unwrap_or("repeat") {
         "repeat" => WrapMode::Repeat,
@@ -156,12 +159,23 @@ fn bitmap(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Texture, LoadError> {
         LoadError::at(
             &b.doc.file,
             pos,
-            format!("texture file \"{}\" (filename=\"{filename}\"): {e}", path.display()),
+            format!(
+                "texture file \"{}\" (filename=\"{filename}\"): {e}",
+                path.display()
+            ),
         )
     };
     let img = read_texture_image(&path, raw).map_err(fail)?;
-    let bitmap = Bitmap::new(img.width, img.height, img.channels, img.data, filter, wrap, to_uv)
-        .map_err(|e| fail(e.to_string()))?;
+    let bitmap = Bitmap::new(
+        img.width,
+        img.height,
+        img.channels,
+        img.data,
+        filter,
+        wrap,
+        to_uv,
+    )
+    .map_err(|e| fail(e.to_string()))?;
     if !raw && bitmap.max_value() > 1.0 {
         // Mitsuba's warning (it tests each texel's luminance; radia the largest channel).
         b.warnings.push(format!(
@@ -174,7 +188,11 @@ fn bitmap(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Texture, LoadError> {
 
 /// `checkerboard` (`src/textures/checkerboard.cpp`): `color0` (0.4) and `color1` (0.2),
 /// each a colour or a texture, and `to_uv`.
-fn checkerboard(b: &mut Builder<'_>, mut p: Props<'_>, nesting: usize) -> Result<Texture, LoadError> {
+fn checkerboard(
+    b: &mut Builder<'_>,
+    mut p: Props<'_>,
+    nesting: usize,
+) -> Result<Texture, LoadError> {
     let color0 = texture_param_nested(b, &mut p, "color0", 0.4, true, nesting)?;
     let color1 = texture_param_nested(b, &mut p, "color1", 0.2, true, nesting)?;
     let to_uv = uv_transform(&mut p)?;
