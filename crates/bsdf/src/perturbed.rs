@@ -95,7 +95,9 @@ pub(crate) fn eval(
     wo: Vec3,
 ) -> Spectrum {
     let pwo = frame.to_local(wo);
-    if !(wo.z * pwo.z > 0.0) {
+    // Written so that NaN counts as "not on the same side".
+    let same_side = wo.z * pwo.z > 0.0;
+    if !same_side {
         return Spectrum::ZERO;
     }
     let v = nested.eval(&to_frame(frame, sp), frame.to_local(wi), pwo);
@@ -109,7 +111,8 @@ pub(crate) fn eval(
 #[inline]
 pub(crate) fn pdf(nested: &Bsdf, frame: &Frame, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
     let pwo = frame.to_local(wo);
-    if !(wo.z * pwo.z > 0.0) {
+    let same_side = wo.z * pwo.z > 0.0;
+    if !same_side {
         return 0.0;
     }
     nested.pdf(&to_frame(frame, sp), frame.to_local(wi), pwo)
@@ -130,7 +133,8 @@ pub(crate) fn sample(
         return None;
     }
     let wo = frame.to_world(bs.wo);
-    if !(bs.wo.z * wo.z > 0.0) {
+    let same_side = bs.wo.z * wo.z > 0.0;
+    if !same_side {
         return None;
     }
     bs.wo = wo;
