@@ -296,7 +296,7 @@ impl Shape {
             }
             ShapeKind::Sphere { center, .. } => {
                 let local = (p - *center).normalize();
-                let mut u = local.y.atan2(local.x) * INV_TWO_PI;
+                let mut u = radia_math::trig::atan2(local.y, local.x) * INV_TWO_PI;
                 if u < 0.0 {
                     u += 1.0;
                 }
@@ -305,7 +305,7 @@ impl Shape {
             ShapeKind::Disk { to_local, .. } => {
                 let local = to_local.transform_point3(p);
                 let r = (local.x * local.x + local.y * local.y).sqrt();
-                let mut v = local.y.atan2(local.x) * INV_TWO_PI;
+                let mut v = radia_math::trig::atan2(local.y, local.x) * INV_TWO_PI;
                 if v < 0.0 {
                     v += 1.0;
                 }
