@@ -2,11 +2,15 @@
 //!
 //! ```text
 //! radia render scenes/cornell-box.xml -o cornell.exr --spp 256 --threads 2 --seed 0
+//! radia render scenes/cornell-box.xml --spp 256 --samples 0..128 -o a.exr    # on one machine
+//! radia render scenes/cornell-box.xml --spp 256 --samples 128..256 -o b.exr  # on another
+//! radia merge a.exr b.exr -o cornell.exr     # = the 256 spp render, up to float rounding
 //! ```
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use radia_render::{image_io::write_image, render, RenderOptions};
+use radia_render::part::{read_part, write_part, Merger, Part, RenderIdentity};
+use radia_render::{image_io::write_image, render, render_part, RenderOptions, SampleRange};
 use radia_sampling::SamplerKind;
 use radia_scene::{load_mitsuba_xml, FilterDesc, LightSamplerKind, Scene};
 use std::path::PathBuf;
@@ -64,6 +68,26 @@ enum Command {
         /// bvh (a light BVH that accounts for distance and orientation; the default).
         #[arg(long, value_name = "uniform|power|bvh")]
         light_sampler: Option<LightSamplerKind>,
+        /// Render only the sample indices A..B (B excluded) of the --spp of every pixel, to a
+        /// partial EXR (weighted sums and weights, with the seed, range, spp and scene
+        /// fingerprint in its header) for `radia merge`.
+        #[arg(long, value_name = "A..B", value_parser = SampleRange::parse)]
+        samples: Option<SampleRange>,
+    },
+    /// Merge partial renders (`render --samples`) of one scene into its image: the same image,
+    /// up to float rounding, as one render of all their samples. Refuses parts of different
+    /// scenes, seeds, samplers or sample counts, and parts that share samples; warns when
+    /// samples are missing.
+    Merge {
+        /// The partial EXRs.
+        #[arg(required = true)]
+        parts: Vec<PathBuf>,
+        /// The merged image (.exr or .png), or a partial EXR again with --partial.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Write the merged sums as a partial EXR (to merge further) instead of the image.
+        #[arg(long)]
+        partial: bool,
     },
 }
 
@@ -79,6 +103,74 @@ fn main() -> ExitCode {
 }
 
 fn run(cli: Cli) -> Result<(), String> {
+    match cli.command {
+        Command::Merge {
+            parts,
+            output,
+            partial,
+        } => merge(&parts, &output, partial),
+        render @ Command::Render { .. } => run_render(render),
+    }
+}
+
+fn merge(parts: &[PathBuf], output: &std::path::Path, partial: bool) -> Result<(), String> {
+    check_output(output, partial)?;
+    let mut merger = Merger::new();
+    for path in parts {
+        let part = read_part(path).map_err(|e| e.to_string())?;
+        merger
+            .push(part, &path.display().to_string())
+            .map_err(|e| e.to_string())?;
+    }
+    let merged = merger.finish().map_err(|e| e.to_string())?;
+    let gaps = merged.gaps();
+    if !gaps.is_empty() {
+        let list: Vec<String> = gaps.iter().map(ToString::to_string).collect();
+        eprintln!(
+            "radia: warning: samples {} of 0..{} are in no part: the image has {} of {} spp",
+            list.join(", "),
+            merged.identity.spp,
+            merged.sample_count(),
+            merged.identity.spp
+        );
+    }
+    if partial {
+        write_part(&merged, output).map_err(|e| e.to_string())?;
+    } else {
+        write_image(&merged.develop(), output).map_err(|e| e.to_string())?;
+    }
+    println!(
+        "radia: merged {} parts, {} of {} spp -> {}",
+        parts.len(),
+        merged.sample_count(),
+        merged.identity.spp,
+        output.display()
+    );
+    Ok(())
+}
+
+/// An image output must end in .exr or .png; a partial one in .exr.
+fn check_output(output: &std::path::Path, partial: bool) -> Result<(), String> {
+    match output
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("exr") => Ok(()),
+        Some("png") if !partial => Ok(()),
+        _ if partial => Err(format!(
+            "{}: a partial render (weighted sums) is written as .exr",
+            output.display()
+        )),
+        _ => Err(format!(
+            "{}: output must end in .exr or .png",
+            output.display()
+        )),
+    }
+}
+
+fn run_render(command: Command) -> Result<(), String> {
     let Command::Render {
         scene: scene_path,
         output,
@@ -91,7 +183,11 @@ fn run(cli: Cli) -> Result<(), String> {
         sampler,
         resolution,
         rfilter,
-    } = cli.command;
+        samples,
+    } = command
+    else {
+        unreachable!("run_render is called with Command::Render")
+    };
     let defines = define
         .iter()
         .map(|d| {
@@ -103,20 +199,7 @@ fn run(cli: Cli) -> Result<(), String> {
     let output = output.unwrap_or_else(|| {
         PathBuf::from(scene_path.file_stem().unwrap_or_default()).with_extension("exr")
     });
-    match output
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .as_deref()
-    {
-        Some("exr") | Some("png") => {}
-        _ => {
-            return Err(format!(
-                "{}: output must end in .exr or .png",
-                output.display()
-            ))
-        }
-    }
+    check_output(&output, samples.is_some())?;
     if let Some(n) = threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(n.max(1))
@@ -134,6 +217,8 @@ fn run(cli: Cli) -> Result<(), String> {
     if let Some(f) = rfilter {
         desc.film.filter = f;
     }
+    // What the parts of a split render must agree on (the film overrides are in `desc`).
+    let fingerprint = desc.fingerprint();
     let mut scene = Scene::build(desc);
     if let Some(kind) = light_sampler {
         scene.set_light_sampler(kind);
@@ -153,6 +238,14 @@ fn run(cli: Cli) -> Result<(), String> {
             sampler.name(),
             options.spp
         );
+    }
+    if let Some(r) = samples {
+        if r.end > options.spp {
+            return Err(format!(
+                "--samples {r} goes past the render's {} spp (--spp gives the whole render's count)",
+                options.spp
+            ));
+        }
     }
     let (w, h) = (scene.film.width, scene.film.height);
     eprintln!(
@@ -177,7 +270,8 @@ fn run(cli: Cli) -> Result<(), String> {
             }
         });
     }
-    let total = w as u64 * h as u64 * options.spp as u64;
+    let range = samples.unwrap_or(SampleRange::new(0, options.spp));
+    let total = w as u64 * h as u64 * range.len() as u64;
     let bar = if quiet {
         ProgressBar::hidden()
     } else {
@@ -190,29 +284,55 @@ fn run(cli: Cli) -> Result<(), String> {
         .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let t_render = Instant::now();
-    let out = render(&scene, &options, &cancel, &|done| bar.set_position(done));
-    let secs = t_render.elapsed().as_secs_f64();
-    bar.finish_and_clear();
-
-    if out.stats.spp == 0 {
+    // The render time excludes writing the image (validation/benchmark.py reads it).
+    let (stats, secs) = if samples.is_some() {
+        let out = render_part(&scene, &options, range, &cancel, &|done| {
+            bar.set_position(done)
+        });
+        let secs = t_render.elapsed().as_secs_f64();
+        bar.finish_and_clear();
+        if out.stats.spp > 0 {
+            let identity = RenderIdentity {
+                scene: fingerprint,
+                seed: options.seed,
+                sampler: sampler.name().to_string(),
+                spp: options.spp,
+                light_sampler: light_sampler.unwrap_or_default().to_string(),
+                width: w,
+                height: h,
+            };
+            let part = Part::new(identity, out.rendered, out.film.into_sums());
+            write_part(&part, &output).map_err(|e| e.to_string())?;
+        }
+        (out.stats, secs)
+    } else {
+        let out = render(&scene, &options, &cancel, &|done| bar.set_position(done));
+        let secs = t_render.elapsed().as_secs_f64();
+        bar.finish_and_clear();
+        if out.stats.spp > 0 {
+            write_image(&out.image, &output).map_err(|e| e.to_string())?;
+        }
+        (out.stats, secs)
+    };
+    if stats.spp == 0 {
         return Err("interrupted before the first pass finished: no image written".into());
     }
-    write_image(&out.image, &output).map_err(|e| e.to_string())?;
     if cancel.load(Ordering::SeqCst) {
         eprintln!(
             "radia: interrupted: saved {} of {} spp",
-            out.stats.spp, options.spp
+            stats.spp,
+            range.len()
         );
     }
     println!(
         "radia: {}x{}, {} spp, {:.3} s render, {:.2} Msamples/s, {:.2} Mrays/s, {} invalid samples dropped -> {}",
         w,
         h,
-        out.stats.spp,
+        stats.spp,
         secs,
-        out.stats.samples as f64 / secs / 1e6,
-        out.stats.rays as f64 / secs / 1e6,
-        out.stats.invalid_samples,
+        stats.samples as f64 / secs / 1e6,
+        stats.rays as f64 / secs / 1e6,
+        stats.invalid_samples,
         output.display()
     );
     Ok(())

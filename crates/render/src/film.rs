@@ -147,24 +147,35 @@ impl Film {
         }
     }
 
+    /// The accumulations (Σ w·r, Σ w·g, Σ w·b, Σ w) per pixel, row-major.
+    pub fn sums(&self) -> &[[f32; 4]] {
+        &self.data
+    }
+
+    /// The accumulations, consuming the film.
+    pub fn into_sums(self) -> Vec<[f32; 4]> {
+        self.data
+    }
+
     /// The developed image: Σ w·L / Σ w per pixel (0 where nothing landed).
     pub fn develop(&self) -> Image {
-        let pixels = self
-            .data
-            .iter()
-            .map(|p| {
-                if p[3] > 0.0 {
-                    Spectrum::new(p[0], p[1], p[2]) / p[3]
-                } else {
-                    Spectrum::ZERO
-                }
-            })
-            .collect();
         Image {
             width: self.width,
             height: self.height,
-            pixels,
+            pixels: self.data.iter().map(|&p| develop_pixel(p)).collect(),
         }
+    }
+}
+
+/// One pixel's value from its accumulations (Σ w·r, Σ w·g, Σ w·b, Σ w): the weighted mean, or 0
+/// where nothing landed. Every image radia writes is developed by this one function, so a
+/// merged render and a single one agree bit for bit when their sums do.
+#[inline]
+pub fn develop_pixel(p: [f32; 4]) -> Spectrum {
+    if p[3] > 0.0 {
+        Spectrum::new(p[0], p[1], p[2]) / p[3]
+    } else {
+        Spectrum::ZERO
     }
 }
 

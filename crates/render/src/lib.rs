@@ -2,8 +2,11 @@
 
 pub mod film;
 pub mod image_io;
+pub mod part;
 pub mod path;
 mod renderer;
 
 pub use film::{Film, Image};
-pub use renderer::{render, RenderOptions, RenderOutput, RenderStats};
+pub use renderer::{
+    render, render_part, FilmOutput, RenderOptions, RenderOutput, RenderStats, SampleRange, PASS_SPP,
+};

@@ -2,6 +2,13 @@
 //! passes so that an interrupted render keeps every finished pass. Tiles are merged into the
 //! film in a fixed order, so the same seed and sample count give the same image bit for bit
 //! whatever the number of threads.
+//!
+//! A render can also be restricted to a range of sample indices ([`render_part`]): the samples
+//! of a pixel depend only on the seed, the pixel and the sample index, so the pieces
+//! [0, a), [a, b), …, [z, N) rendered anywhere add up (see [`crate::part`]) to the render of
+//! [0, N), up to the rounding of the float sums. Passes start at multiples of [`PASS_SPP`]
+//! whatever the range, so a piece whose ends are multiples of it groups its samples exactly
+//! as the whole render does.
 
 use crate::film::{Film, Filter, Image};
 use crate::path::{layout, PathIntegrator, PathStats};
@@ -22,7 +29,7 @@ fn tile_size(w: u32, h: u32) -> u32 {
 }
 const MIN_TILES: u32 = 64;
 /// Samples per pixel in one pass (the granularity at which an interrupted render stops).
-const PASS_SPP: u32 = 16;
+pub const PASS_SPP: u32 = 16;
 
 #[derive(Clone, Copy, Debug)]
 pub struct RenderOptions {
@@ -34,7 +41,8 @@ pub struct RenderOptions {
 
 #[derive(Clone, Copy, Debug, Default)]
 pub struct RenderStats {
-    /// Samples per pixel actually rendered (less than asked if interrupted).
+    /// Samples per pixel actually rendered (less than asked if interrupted; of the range asked
+    /// for in [`render_part`]).
     pub spp: u32,
     pub rays: u64,
     pub samples: u64,
@@ -45,6 +53,58 @@ pub struct RenderStats {
 pub struct RenderOutput {
     pub image: Image,
     pub stats: RenderStats,
+}
+
+/// Sample indices `start..end` of every pixel (of the `spp` the sampler is stratified over).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct SampleRange {
+    pub start: u32,
+    pub end: u32,
+}
+
+impl SampleRange {
+    pub fn new(start: u32, end: u32) -> Self {
+        Self { start, end }
+    }
+
+    pub fn len(&self) -> u32 {
+        self.end.saturating_sub(self.start)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Parses `A..B` (B excluded).
+    pub fn parse(s: &str) -> Result<Self, String> {
+        let (a, b) = s
+            .split_once("..")
+            .ok_or_else(|| format!("'{s}' is not a sample range A..B"))?;
+        let n = |v: &str| {
+            v.trim()
+                .parse::<u32>()
+                .map_err(|_| format!("'{s}' is not a sample range A..B of integers"))
+        };
+        let r = Self::new(n(a)?, n(b)?);
+        if r.is_empty() {
+            return Err(format!("sample range '{s}' is empty (A..B needs A < B)"));
+        }
+        Ok(r)
+    }
+}
+
+impl std::fmt::Display for SampleRange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}..{}", self.start, self.end)
+    }
+}
+
+/// The accumulated film of a render of some sample range, before it is developed.
+pub struct FilmOutput {
+    pub film: Film,
+    pub stats: RenderStats,
+    /// The samples actually rendered: the range asked for, or a prefix of it if interrupted.
+    pub rendered: SampleRange,
 }
 
 struct TileResult {
@@ -62,8 +122,29 @@ pub fn render(
     cancel: &AtomicBool,
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderOutput {
+    // Every sample the sampler has (render_part clamps the range to its count).
+    let all = SampleRange::new(0, u32::MAX);
+    let out = render_part(scene, options, all, cancel, progress);
+    RenderOutput {
+        image: out.film.develop(),
+        stats: out.stats,
+    }
+}
+
+/// Renders only the sample indices `samples` of every pixel (clamped to `options.spp`, the
+/// count the sampler is stratified over) and returns the undeveloped film: its sums add up
+/// with those of the other ranges' films ([`crate::part::Part`]).
+pub fn render_part(
+    scene: &Scene,
+    options: &RenderOptions,
+    samples: SampleRange,
+    cancel: &AtomicBool,
+    progress: &(dyn Fn(u64) + Sync),
+) -> FilmOutput {
     let sampler = AnySampler::new(options.sampler, options.spp);
-    with_sampler!(&sampler, s => render_with(scene, s, options.seed, cancel, progress))
+    let end = samples.end.min(sampler.sample_count());
+    let samples = SampleRange::new(samples.start.min(end), end);
+    with_sampler!(&sampler, s => render_with(scene, s, options.seed, samples, cancel, progress))
 }
 
 /// [`render`] with a concrete sampler, so that its calls inline into the path loop.
@@ -71,10 +152,10 @@ fn render_with<S: Sampler>(
     scene: &Scene,
     sampler: &S,
     seed: u64,
+    samples: SampleRange,
     cancel: &AtomicBool,
     progress: &(dyn Fn(u64) + Sync),
-) -> RenderOutput {
-    let spp = sampler.sample_count();
+) -> FilmOutput {
     let (w, h) = (scene.film.width, scene.film.height);
     let filter = Filter::new(scene.film.filter);
     let margin = (filter.radius() - 0.5).ceil().max(0.0) as i32;
@@ -88,9 +169,10 @@ fn render_with<S: Sampler>(
         .collect();
     let done = AtomicU64::new(0);
 
-    let mut spp_start = 0;
-    while spp_start < spp {
-        let spp_end = (spp_start + PASS_SPP).min(spp);
+    let mut spp_start = samples.start;
+    while spp_start < samples.end {
+        // Passes are aligned to multiples of PASS_SPP (see the module comment).
+        let spp_end = ((spp_start / PASS_SPP + 1) * PASS_SPP).min(samples.end);
         let results: Vec<Option<TileResult>> = tiles
             .par_iter()
             .map(|&(x0, y0)| {
@@ -146,11 +228,12 @@ fn render_with<S: Sampler>(
             stats.invalid_samples += r.invalid;
         }
         stats.samples += w as u64 * h as u64 * (spp_end - spp_start) as u64;
-        stats.spp = spp_end;
+        stats.spp = spp_end - samples.start;
         spp_start = spp_end;
     }
-    RenderOutput {
-        image: film.develop(),
+    FilmOutput {
+        film,
         stats,
+        rendered: SampleRange::new(samples.start, spp_start),
     }
 }

@@ -5,6 +5,7 @@ pub mod accel;
 pub mod camera;
 pub mod description;
 pub mod emitter;
+mod fingerprint;
 pub mod lights;
 pub mod loader;
 pub mod shape;
