@@ -1,0 +1,112 @@
+"""Type stubs of radia's native module (re-exported by ``radia``)."""
+from os import PathLike
+from typing import List, Optional, Sequence, Tuple, Union, overload
+
+import numpy as np
+import numpy.typing as npt
+
+_Path = Union[str, "PathLike[str]"]
+_Image = npt.NDArray[np.float32]
+
+class LoadError(ValueError):
+    """A scene, or a file it references, could not be loaded."""
+    file: str
+    """The file the problem is in (the scene or a mesh/texture it references)."""
+    line: Optional[int]
+    """1-based line, when known."""
+    column: Optional[int]
+    """1-based column, when known."""
+    message: str
+    """The problem, without its location."""
+
+class MergeError(ValueError):
+    """Parts of different renders, or parts sharing samples."""
+
+class Scene:
+    """A loaded scene, ready to render."""
+    @property
+    def resolution(self) -> Tuple[int, int]:
+        """(width, height) of the film in pixels."""
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+    @property
+    def spp(self) -> int:
+        """Samples per pixel the scene's sampler asks for."""
+    @property
+    def sampler(self) -> str:
+        """The scene's sampler: "independent", "stratified", "sobol", ..."""
+    def render_spp(self, spp: Optional[int] = None) -> int:
+        """The sample count render() renders for spp (default the scene's), rounded as the
+        sampler requires."""
+    @property
+    def emitters(self) -> int:
+        """Number of emitters, area lights included."""
+    @property
+    def shapes(self) -> int:
+        """Number of shapes."""
+    @property
+    def primitives(self) -> int:
+        """Number of BVH primitives (triangles and analytic shapes)."""
+    @property
+    def path(self) -> str:
+        """The file it was loaded from."""
+    @property
+    def fingerprint(self) -> str:
+        """Hash of the scene's content (16 hex digits)."""
+
+class Part:
+    """The accumulated film of some sample ranges of a render. Picklable."""
+    @property
+    def samples(self) -> List[Tuple[int, int]]:
+        """Its sample ranges [(a, b), ...], b excluded, sorted."""
+    @property
+    def sample_count(self) -> int:
+        """Samples per pixel it holds."""
+    @property
+    def spp(self) -> int:
+        """The whole render's samples per pixel."""
+    @property
+    def seed(self) -> int: ...
+    @property
+    def sampler(self) -> str: ...
+    @property
+    def scene(self) -> str:
+        """The scene's fingerprint."""
+    @property
+    def resolution(self) -> Tuple[int, int]:
+        """(width, height) in pixels."""
+    def gaps(self) -> List[Tuple[int, int]]:
+        """The ranges of [0, spp) it does not hold."""
+    def develop(self) -> _Image:
+        """The image of its samples: float32 (height, width, 3)."""
+    def sums(self) -> npt.NDArray[np.float32]:
+        """float32 (height, width, 4): (Σw·r, Σw·g, Σw·b, Σw) per pixel."""
+    def write(self, path: _Path) -> None:
+        """Writes it as a partial EXR (what `radia merge` reads)."""
+
+def load_file(path: _Path, **defines: object) -> Scene:
+    """Loads a Mitsuba 3 XML scene; keyword arguments override its <default> parameters (as
+    Mitsuba's -D). Raises LoadError."""
+
+@overload
+def render(scene: Scene, spp: Optional[int] = None, seed: int = 0,
+           threads: Optional[int] = None, samples: None = None) -> _Image: ...
+@overload
+def render(scene: Scene, spp: Optional[int] = None, seed: int = 0,
+           threads: Optional[int] = None, *, samples: Tuple[int, int]) -> Part: ...
+def render(scene: Scene, spp: Optional[int] = None, seed: int = 0,
+           threads: Optional[int] = None,
+           samples: Optional[Tuple[int, int]] = None) -> Union[_Image, Part]:
+    """Renders scene: a float32 (height, width, 3) linear RGB array; with samples=(a, b) only
+    sample indices a..b of the spp of every pixel, as a Part. spp defaults to the scene's,
+    seed to 0, threads to all cores. Releases the GIL; Ctrl-C raises KeyboardInterrupt."""
+
+def write_image(array: npt.ArrayLike, path: _Path) -> None:
+    """Writes a float32 (height, width, 3) linear RGB array as EXR or PNG (by extension)."""
+
+def read_part(path: _Path) -> Part:
+    """Reads a partial EXR."""
+
+def _merge(parts: Sequence[Part], names: Optional[Sequence[str]] = None) -> Part: ...
