@@ -121,8 +121,8 @@ impl Part {
     pub fn add(&mut self, other: &Part, a: &str, b: &str) -> Result<(), PartError> {
         self.check_compatible(other, a, b)?;
         for (d, s) in self.sums.iter_mut().zip(&other.sums) {
-            for c in 0..4 {
-                d[c] += s[c];
+            for (d, s) in d.iter_mut().zip(s) {
+                *d += s;
             }
         }
         self.samples.extend_from_slice(&other.samples);

@@ -72,7 +72,7 @@ fn hash_mesh(h: &mut Hasher, mesh: &Mesh) {
         h.vec3s(n);
     }
     if let Some(uv) = &mesh.uvs {
-        for v in uv.iter().map(Vec2::to_array).flatten() {
+        for v in uv.iter().flat_map(Vec2::to_array) {
             h.0.update(&v.to_le_bytes());
         }
     }
