@@ -408,7 +408,7 @@ pub fn read_part(path: &Path) -> Result<Part, PartError> {
             .channel_data
             .list
             .iter()
-            .find(|ch| ch.name == Text::from(*name))
+            .find(|ch| ch.name == **name)
             .ok_or_else(|| not_part(format!("no '{name}' channel")))?;
         let FlatSamples::F32(values) = &ch.sample_data else {
             return Err(not_part(format!("channel '{name}' is not float32")));
