@@ -7,6 +7,7 @@ pub mod description;
 pub mod emitter;
 pub mod lights;
 pub mod loader;
+pub mod memory;
 pub mod shape;
 mod spherical;
 
