@@ -6,4 +6,4 @@ pub mod path;
 mod renderer;
 
 pub use film::{Film, Image};
-pub use renderer::{render, RenderOptions, RenderOutput, RenderStats};
+pub use renderer::{render, render_until, RenderOptions, RenderOutput, RenderStats};

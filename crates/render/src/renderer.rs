@@ -10,6 +10,7 @@ use radia_sampling::{with_sampler, AnySampler, PixelKey, SampleStream, Sampler, 
 use radia_scene::Scene;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::Instant;
 
 /// Tile edge in pixels: the largest of 32, 16, 8 that still cuts the image into at least
 /// [`MIN_TILES`] tiles, so that both cores stay busy to the end of every pass even on small
@@ -62,8 +63,21 @@ pub fn render(
     cancel: &AtomicBool,
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderOutput {
+    render_until(scene, options, None, cancel, progress)
+}
+
+/// [`render`] within a time budget: no pass is started that, at the mean duration of the
+/// passes so far, would end after `deadline` (the first pass always runs). `stats.spp` says
+/// how many samples per pixel were reached.
+pub fn render_until(
+    scene: &Scene,
+    options: &RenderOptions,
+    deadline: Option<Instant>,
+    cancel: &AtomicBool,
+    progress: &(dyn Fn(u64) + Sync),
+) -> RenderOutput {
     let sampler = AnySampler::new(options.sampler, options.spp);
-    with_sampler!(&sampler, s => render_with(scene, s, options.seed, cancel, progress))
+    with_sampler!(&sampler, s => render_with(scene, s, options.seed, deadline, cancel, progress))
 }
 
 /// [`render`] with a concrete sampler, so that its calls inline into the path loop.
@@ -71,10 +85,13 @@ fn render_with<S: Sampler>(
     scene: &Scene,
     sampler: &S,
     seed: u64,
+    deadline: Option<Instant>,
     cancel: &AtomicBool,
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderOutput {
     let spp = sampler.sample_count();
+    let start = Instant::now();
+    let mut passes = 0u32;
     let (w, h) = (scene.film.width, scene.film.height);
     let filter = Filter::new(scene.film.filter);
     let margin = (filter.radius() - 0.5).ceil().max(0.0) as i32;
@@ -90,6 +107,12 @@ fn render_with<S: Sampler>(
 
     let mut spp_start = 0;
     while spp_start < spp {
+        if let (Some(deadline), true) = (deadline, passes > 0) {
+            let mean_pass = start.elapsed() / passes;
+            if Instant::now() + mean_pass > deadline {
+                break;
+            }
+        }
         let spp_end = (spp_start + PASS_SPP).min(spp);
         let results: Vec<Option<TileResult>> = tiles
             .par_iter()
@@ -148,6 +171,7 @@ fn render_with<S: Sampler>(
         stats.samples += w as u64 * h as u64 * (spp_end - spp_start) as u64;
         stats.spp = spp_end;
         spp_start = spp_end;
+        passes += 1;
     }
     RenderOutput {
         image: film.develop(),
