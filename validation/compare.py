@@ -58,6 +58,9 @@ def main(argv=None):
     ap.add_argument("--ref-dir", default=REFERENCE_DIR, help="reference cache (default validation/references)")
     ap.add_argument("--out", default=OUT_DIR, help="output directory for the report (default validation/out)")
     ap.add_argument("--no-report", action="store_true", help="do not write report.html")
+    ap.add_argument("--fail-on-invalid", action="store_true",
+                    help="fail if radia drops any NaN/Inf sample on any scene (its 'invalid samples "
+                         "dropped' count), even where the statistics pass (tests/run-all uses it)")
     g = ap.add_argument_group("references")
     g.add_argument("--make-references", action="store_true",
                    help="(re)render the references of the given scenes (default: all of scenes/) and exit")
@@ -141,8 +144,13 @@ def main(argv=None):
     n_fail = sum(not r["passed"] for r in results)
     n_pass = len(results) - n_fail
     log(f"compare: {n_pass} passed, {n_fail} failed, {len(errors)} errors in {total:.1f} s")
+    invalid = [(r["scene"], r["invalid_samples"]) for r in results if r.get("invalid_samples")]
+    for scene, n in invalid:
+        log(f"INVALID {scene}: radia dropped {n} NaN/Inf samples")
     if errors:
         return 2
+    if a.fail_on_invalid and invalid:
+        return 1
     return 1 if n_fail else 0
 
 

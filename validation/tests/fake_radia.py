@@ -7,7 +7,7 @@ to end without it: renders with Mitsuba (scalar_rgb) and speaks radia's command 
 Overrides are applied as radia applies them (film size, filter, sampler type and
 spp on top of the scene's own); --sampler sobol renders with Mitsuba's
 independent sampler. Prints radia's "loaded" and final lines, with the spp the
-sampler actually rendered. FAKE_RADIA_BIAS=F in the environment multiplies the
+sampler actually rendered. FAKE_RADIA_INVALID=N makes it report N dropped samples; FAKE_RADIA_BIAS=F in the environment multiplies the
 image by F.
 """
 import argparse
@@ -59,7 +59,7 @@ def main():
     write_exr(a.output, img)
     h, w = img.shape[:2]
     print(f"radia: {w}x{h}, {spp} spp, {t2 - t1:.3f} s render, "
-          f"{w * h * spp / (t2 - t1) / 1e6:.2f} Msamples/s, 0.00 Mrays/s, 0 invalid samples dropped -> {a.output}")
+          f"{w * h * spp / (t2 - t1) / 1e6:.2f} Msamples/s, 0.00 Mrays/s, {os.environ.get('FAKE_RADIA_INVALID', '0')} invalid samples dropped -> {a.output}")
 
 
 if __name__ == "__main__":

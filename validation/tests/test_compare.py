@@ -287,15 +287,15 @@ class CommandLine(unittest.TestCase):
     def fake_radia(self, tmp):
         return fake_radia(tmp)
 
-    def run_cli(self, bias, code):
+    def run_cli(self, bias, code, invalid="0", extra=()):
         """compare.py drives a binary with radia's command line (a Mitsuba
         stand-in), reads its EXRs, writes the report and sets the exit status."""
         tmp = tmpdir(self)
         out = os.path.join(tmp, "out")
-        env = dict(os.environ, FAKE_RADIA_BIAS=bias)
+        env = dict(os.environ, FAKE_RADIA_BIAS=bias, FAKE_RADIA_INVALID=invalid)
         p = subprocess.run([PY, COMPARE, SIMPLE, "--res", str(RES), "--spp", "8", "--passes", "6",
                             "--ref-dir", shared_ref_dir(), "--radia", self.fake_radia(tmp),
-                            "--out", out], capture_output=True, text=True, env=env)
+                            "--out", out, *extra], capture_output=True, text=True, env=env)
         self.assertEqual(p.returncode, code, p.stdout + p.stderr)
         self.assertTrue(os.path.exists(os.path.join(out, "report.html")))
         for f in ("images.png", "maps.png", "tstats.png", "result.json"):
@@ -307,6 +307,10 @@ class CommandLine(unittest.TestCase):
 
     def test_cli_fail(self):
         self.run_cli("1.5", 1)
+
+    def test_dropped_samples_fail_with_fail_on_invalid(self):
+        self.run_cli("1", 0, invalid="3")
+        self.run_cli("1", 1, invalid="3", extra=["--fail-on-invalid"])
 
     def test_missing_binary_is_an_error(self):
         tmp = tmpdir(self)

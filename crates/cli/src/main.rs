@@ -2,22 +2,21 @@
 //!
 //! ```text
 //! radia render scenes/cornell-box.xml -o cornell.exr --spp 256 --threads 2 --seed 0
-//! radia render scenes/cornell-box.xml --spp 256 --samples 0..128 -o a.exr    # on one machine
-//! radia render scenes/cornell-box.xml --spp 256 --samples 128..256 -o b.exr  # on another
-//! radia merge a.exr b.exr -o cornell.exr     # = the 256 spp render, up to float rounding
 //! ```
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use radia_render::part::{read_part, write_part, Merger, Part, RenderIdentity};
-use radia_render::{image_io::write_image, render, render_part, RenderOptions, SampleRange};
+use radia_render::{
+    image_io::write_image, render_part_until, render_until, RenderOptions, SampleRange,
+};
 use radia_sampling::SamplerKind;
 use radia_scene::{load_mitsuba_xml, FilterDesc, LightSamplerKind, Scene};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 #[derive(Parser)]
 #[command(
@@ -68,6 +67,10 @@ enum Command {
         /// bvh (a light BVH that accounts for distance and orientation; the default).
         #[arg(long, value_name = "uniform|power|bvh")]
         light_sampler: Option<LightSamplerKind>,
+        /// Render passes of 16 spp until the next one would end after SECONDS, then write
+        /// the image (up to --spp if given, else without a sample limit).
+        #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+        time_budget: Option<Duration>,
         /// Render only the sample indices A..B (B excluded) of the --spp of every pixel, to a
         /// partial EXR (weighted sums and weights, with the seed, range, spp and scene
         /// fingerprint in its header) for `radia merge`.
@@ -94,7 +97,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(message) => {
             eprintln!("radia: error: {message}");
             ExitCode::FAILURE
@@ -102,13 +105,41 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(cli: Cli) -> Result<(), String> {
+/// Ctrl-C (SIGINT) and SIGTERM. The first stops the render at the end of the current pass
+/// (that pass is dropped, the finished ones are written) and is recorded in `signal`; a
+/// second one exits at once, with the conventional status 128 + signal and no image.
+fn handle_signals(cancel: Arc<AtomicBool>, signal: Arc<AtomicI32>) -> Result<(), String> {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM])
+        .map_err(|e| format!("cannot install the signal handlers: {e}"))?;
+    std::thread::spawn(move || {
+        for sig in signals.forever() {
+            if cancel.load(Ordering::SeqCst) {
+                eprintln!("\nradia: {} again: exiting without writing", signal_name(sig));
+                std::process::exit(128 + sig);
+            }
+            signal.store(sig, Ordering::SeqCst);
+            cancel.store(true, Ordering::SeqCst);
+        }
+    });
+    Ok(())
+}
+
+fn signal_name(sig: i32) -> &'static str {
+    match sig {
+        signal_hook::consts::SIGINT => "SIGINT",
+        signal_hook::consts::SIGTERM => "SIGTERM",
+        _ => "signal",
+    }
+}
+
+fn run(cli: Cli) -> Result<ExitCode, String> {
     match cli.command {
         Command::Merge {
             parts,
             output,
             partial,
-        } => merge(&parts, &output, partial),
+        } => merge(&parts, &output, partial).map(|()| ExitCode::SUCCESS),
         render @ Command::Render { .. } => run_render(render),
     }
 }
@@ -170,7 +201,7 @@ fn check_output(output: &std::path::Path, partial: bool) -> Result<(), String> {
     }
 }
 
-fn run_render(command: Command) -> Result<(), String> {
+fn run_render(command: Command) -> Result<ExitCode, String> {
     let Command::Render {
         scene: scene_path,
         output,
@@ -183,11 +214,18 @@ fn run_render(command: Command) -> Result<(), String> {
         sampler,
         resolution,
         rfilter,
+        time_budget,
         samples,
     } = command
     else {
         unreachable!("run_render is called with Command::Render")
     };
+    if let Some(s) = spp {
+        let max = SamplerKind::MAX_SAMPLE_COUNT;
+        if s == 0 || s > max {
+            return Err(format!("--spp {s}: must be in the range [1, {max}]"));
+        }
+    }
     let defines = define
         .iter()
         .map(|d| {
@@ -213,6 +251,7 @@ fn run_render(command: Command) -> Result<(), String> {
     if let Some((w, h)) = resolution {
         desc.film.width = w;
         desc.film.height = h;
+        desc.film.check_size().map_err(|e| format!("--resolution {w}x{h}: {e}"))?;
     }
     if let Some(f) = rfilter {
         desc.film.filter = f;
@@ -225,7 +264,12 @@ fn run_render(command: Command) -> Result<(), String> {
     }
     let load_secs = t_load.elapsed().as_secs_f64();
     let sampler = sampler.unwrap_or(scene.sampler.kind);
-    let asked = spp.unwrap_or(scene.sampler.sample_count).max(1);
+    // A time budget without --spp renders as many samples as the time allows.
+    let asked = match (spp, time_budget) {
+        (Some(n), _) => n,
+        (None, Some(_)) => SamplerKind::MAX_SAMPLE_COUNT,
+        (None, None) => scene.sampler.sample_count.max(1),
+    };
     let options = RenderOptions {
         // As Mitsuba's samplers do, round to the nearest count the sampler can stratify.
         spp: sampler.round_sample_count(asked),
@@ -238,14 +282,6 @@ fn run_render(command: Command) -> Result<(), String> {
             sampler.name(),
             options.spp
         );
-    }
-    if let Some(r) = samples {
-        if r.end > options.spp {
-            return Err(format!(
-                "--samples {r} goes past the render's {} spp (--spp gives the whole render's count)",
-                options.spp
-            ));
-        }
     }
     let (w, h) = (scene.film.width, scene.film.height);
     eprintln!(
@@ -261,19 +297,14 @@ fn run_render(command: Command) -> Result<(), String> {
     );
 
     let cancel = Arc::new(AtomicBool::new(false));
-    {
-        let cancel = cancel.clone();
-        // Ctrl-C stops after the current pass; the finished passes are saved.
-        let _ = ctrlc::set_handler(move || {
-            if cancel.swap(true, Ordering::SeqCst) {
-                std::process::exit(130);
-            }
-        });
-    }
+    let signal = Arc::new(AtomicI32::new(0));
+    handle_signals(cancel.clone(), signal.clone())?;
     let range = samples.unwrap_or(SampleRange::new(0, options.spp));
     let total = w as u64 * h as u64 * range.len() as u64;
     let bar = if quiet {
         ProgressBar::hidden()
+    } else if time_budget.is_some() && spp.is_none() {
+        ProgressBar::new_spinner()
     } else {
         ProgressBar::new(total)
     };
@@ -284,44 +315,59 @@ fn run_render(command: Command) -> Result<(), String> {
         .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let t_render = Instant::now();
+    let deadline = time_budget.map(|b| t_render + b);
     // The render time excludes writing the image (validation/benchmark.py reads it).
-    let (stats, secs) = if samples.is_some() {
-        let out = render_part(&scene, &options, range, &cancel, &|done| {
+    let (stats, image, secs) = if samples.is_some() {
+        let out = render_part_until(&scene, &options, range, deadline, &cancel, &|done| {
             bar.set_position(done)
         });
         let secs = t_render.elapsed().as_secs_f64();
-        bar.finish_and_clear();
-        if out.stats.spp > 0 {
-            let identity = RenderIdentity {
-                scene: fingerprint,
-                seed: options.seed,
-                sampler: sampler.name().to_string(),
-                spp: options.spp,
-                light_sampler: light_sampler.unwrap_or_default().to_string(),
-                width: w,
-                height: h,
-            };
-            let part = Part::new(identity, out.rendered, out.film.into_sums());
-            write_part(&part, &output).map_err(|e| e.to_string())?;
-        }
-        (out.stats, secs)
+        let identity = RenderIdentity {
+            scene: fingerprint,
+            seed: options.seed,
+            sampler: sampler.name().to_string(),
+            spp: options.spp,
+            light_sampler: light_sampler.unwrap_or_default().to_string(),
+            width: w,
+            height: h,
+        };
+        let part = Part::new(identity, out.rendered, out.film.into_sums());
+        (out.stats, Output::Part(part), secs)
     } else {
-        let out = render(&scene, &options, &cancel, &|done| bar.set_position(done));
+        let out = render_until(&scene, &options, deadline, &cancel, &|done| {
+            bar.set_position(done)
+        });
         let secs = t_render.elapsed().as_secs_f64();
-        bar.finish_and_clear();
-        if out.stats.spp > 0 {
-            write_image(&out.image, &output).map_err(|e| e.to_string())?;
-        }
-        (out.stats, secs)
+        (out.stats, Output::Image(out.image), secs)
+    };
+    bar.finish_and_clear();
+
+    let interrupted = match signal.load(Ordering::SeqCst) {
+        0 => None,
+        sig => Some(sig),
     };
     if stats.spp == 0 {
-        return Err("interrupted before the first pass finished: no image written".into());
+        let why = interrupted.map_or("stopped", signal_name);
+        eprintln!("radia: {why} before the first pass finished: no image written");
+        return Ok(ExitCode::from(interrupted.map_or(1, |s| 128 + s) as u8));
     }
-    if cancel.load(Ordering::SeqCst) {
+    match &image {
+        Output::Image(image) => write_image(image, &output).map_err(|e| e.to_string())?,
+        Output::Part(part) => write_part(part, &output).map_err(|e| e.to_string())?,
+    }
+    if let Some(sig) = interrupted {
         eprintln!(
-            "radia: interrupted: saved {} of {} spp",
+            "radia: interrupted by {}: wrote {} of {} spp to {}",
+            signal_name(sig),
             stats.spp,
-            range.len()
+            range.len(),
+            output.display()
+        );
+    } else if let Some(budget) = time_budget {
+        eprintln!(
+            "radia: time budget of {:.3} s: reached {} spp in {secs:.3} s",
+            budget.as_secs_f64(),
+            stats.spp
         );
     }
     println!(
@@ -335,7 +381,25 @@ fn run_render(command: Command) -> Result<(), String> {
         stats.invalid_samples,
         output.display()
     );
-    Ok(())
+    Ok(match interrupted {
+        Some(sig) => ExitCode::from((128 + sig) as u8),
+        None => ExitCode::SUCCESS,
+    })
+}
+
+/// What a render writes: the image, or a partial render (`--samples`) for `radia merge`.
+enum Output {
+    Image(radia_render::Image),
+    Part(Part),
+}
+
+fn parse_seconds(s: &str) -> Result<Duration, String> {
+    s.trim()
+        .parse::<f64>()
+        .ok()
+        .and_then(|v| Duration::try_from_secs_f64(v).ok())
+        .filter(|d| !d.is_zero())
+        .ok_or_else(|| format!("'{s}' is not a positive number of seconds"))
 }
 
 fn parse_sampler(s: &str) -> Result<SamplerKind, String> {

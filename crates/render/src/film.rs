@@ -81,7 +81,7 @@ impl Film {
             width,
             height,
             filter,
-            data: vec![[0.0; 4]; (width * height) as usize],
+            data: vec![[0.0; 4]; width as usize * height as usize],
         }
     }
 

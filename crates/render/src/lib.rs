@@ -8,5 +8,6 @@ mod renderer;
 
 pub use film::{Film, Image};
 pub use renderer::{
-    render, render_part, FilmOutput, RenderOptions, RenderOutput, RenderStats, SampleRange, PASS_SPP,
+    render, render_part, render_part_until, render_until, FilmOutput, RenderOptions, RenderOutput, RenderStats,
+    SampleRange, PASS_SPP,
 };

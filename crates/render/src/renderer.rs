@@ -17,6 +17,7 @@ use radia_sampling::{with_sampler, AnySampler, PixelKey, SampleStream, Sampler, 
 use radia_scene::Scene;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::Instant;
 
 /// Tile edge in pixels: the largest of 32, 16, 8 that still cuts the image into at least
 /// [`MIN_TILES`] tiles, so that both cores stay busy to the end of every pass even on small
@@ -122,9 +123,22 @@ pub fn render(
     cancel: &AtomicBool,
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderOutput {
+    render_until(scene, options, None, cancel, progress)
+}
+
+/// [`render`] within a time budget: no pass is started that, at the mean duration of the
+/// passes so far, would end after `deadline` (the first pass always runs). `stats.spp` says
+/// how many samples per pixel were reached.
+pub fn render_until(
+    scene: &Scene,
+    options: &RenderOptions,
+    deadline: Option<Instant>,
+    cancel: &AtomicBool,
+    progress: &(dyn Fn(u64) + Sync),
+) -> RenderOutput {
     // Every sample the sampler has (render_part clamps the range to its count).
     let all = SampleRange::new(0, u32::MAX);
-    let out = render_part(scene, options, all, cancel, progress);
+    let out = render_part_until(scene, options, all, deadline, cancel, progress);
     RenderOutput {
         image: out.film.develop(),
         stats: out.stats,
@@ -141,10 +155,24 @@ pub fn render_part(
     cancel: &AtomicBool,
     progress: &(dyn Fn(u64) + Sync),
 ) -> FilmOutput {
+    render_part_until(scene, options, samples, None, cancel, progress)
+}
+
+/// [`render_part`] within a time budget, as [`render_until`].
+pub fn render_part_until(
+    scene: &Scene,
+    options: &RenderOptions,
+    samples: SampleRange,
+    deadline: Option<Instant>,
+    cancel: &AtomicBool,
+    progress: &(dyn Fn(u64) + Sync),
+) -> FilmOutput {
     let sampler = AnySampler::new(options.sampler, options.spp);
     let end = samples.end.min(sampler.sample_count());
     let samples = SampleRange::new(samples.start.min(end), end);
-    with_sampler!(&sampler, s => render_with(scene, s, options.seed, samples, cancel, progress))
+    with_sampler!(&sampler, s => {
+        render_with(scene, s, options.seed, samples, deadline, cancel, progress)
+    })
 }
 
 /// [`render`] with a concrete sampler, so that its calls inline into the path loop.
@@ -153,9 +181,12 @@ fn render_with<S: Sampler>(
     sampler: &S,
     seed: u64,
     samples: SampleRange,
+    deadline: Option<Instant>,
     cancel: &AtomicBool,
     progress: &(dyn Fn(u64) + Sync),
 ) -> FilmOutput {
+    let start = Instant::now();
+    let mut passes = 0u32;
     let (w, h) = (scene.film.width, scene.film.height);
     let filter = Filter::new(scene.film.filter);
     let margin = (filter.radius() - 0.5).ceil().max(0.0) as i32;
@@ -171,6 +202,12 @@ fn render_with<S: Sampler>(
 
     let mut spp_start = samples.start;
     while spp_start < samples.end {
+        if let (Some(deadline), true) = (deadline, passes > 0) {
+            let mean_pass = start.elapsed() / passes;
+            if Instant::now() + mean_pass > deadline {
+                break;
+            }
+        }
         // Passes are aligned to multiples of PASS_SPP (see the module comment).
         let spp_end = ((spp_start / PASS_SPP + 1) * PASS_SPP).min(samples.end);
         let results: Vec<Option<TileResult>> = tiles
@@ -230,6 +267,7 @@ fn render_with<S: Sampler>(
         stats.samples += w as u64 * h as u64 * (spp_end - spp_start) as u64;
         stats.spp = spp_end - samples.start;
         spp_start = spp_end;
+        passes += 1;
     }
     FilmOutput {
         film,

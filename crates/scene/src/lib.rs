@@ -8,6 +8,7 @@ pub mod emitter;
 mod fingerprint;
 pub mod lights;
 pub mod loader;
+pub mod memory;
 pub mod shape;
 mod spherical;
 

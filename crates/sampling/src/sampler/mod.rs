@@ -203,8 +203,12 @@ impl SamplerKind {
         "sobol",
     ];
 
-    /// The sample count this sampler renders when `spp` are asked for (Mitsuba's
-    /// `set_sample_count` rounding).
+    /// The largest sample count radia accepts: every sampler's rounding of it
+    /// ([`SamplerKind::round_sample_count`]; ldsampler's is 2³⁰ itself) still fits a `u32`.
+    pub const MAX_SAMPLE_COUNT: u32 = 1 << 30;
+
+    /// The sample count this sampler renders when `spp` (at most
+    /// [`SamplerKind::MAX_SAMPLE_COUNT`]) are asked for (Mitsuba's `set_sample_count` rounding).
     pub fn round_sample_count(&self, spp: u32) -> u32 {
         let spp = spp.max(1);
         match self {

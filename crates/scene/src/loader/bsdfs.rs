@@ -267,18 +267,28 @@ fn alphas(p: &mut Props<'_>, roughness_too: bool) -> Result<(f32, f32), LoadErro
         if !(p.has("alpha_u") && p.has("alpha_v")) {
             return Err(p.err("microfacet model: both 'alpha_u' and 'alpha_v' must be specified"));
         }
-        (p.float("alpha_u", 0.1)?, p.float("alpha_v", 0.1)?)
+        (roughness(p, "alpha_u", 0.1)?, roughness(p, "alpha_v", 0.1)?)
     } else if roughness_too && p.has("roughness") {
-        let r = p.float("roughness", 0.0)?;
+        let r = roughness(p, "roughness", 0.0)?;
         (r * r, r * r)
     } else {
-        let a = p.float("alpha", 0.1)?;
+        let a = roughness(p, "alpha", 0.1)?;
         (a, a)
     };
-    if !(au.is_finite() && av.is_finite()) {
-        return Err(p.err("microfacet model: roughness must be finite"));
-    }
     Ok((au as f32, av as f32))
+}
+
+/// One roughness parameter, finite and >= 0. Mitsuba clamps a negative alpha to its floor
+/// (a near mirror) without a word; radia refuses it, as it is most likely a typo.
+fn roughness(p: &mut Props<'_>, name: &str, default: f64) -> Result<f64, LoadError> {
+    let v = p.float(name, default)?;
+    if !(v.is_finite() && v >= 0.0) {
+        return Err(p.err_at(
+            p.pos_of(name),
+            format!("microfacet model: \"{name}\" must be a finite number >= 0, got {v}"),
+        ));
+    }
+    Ok(v)
 }
 
 /// radia's `height_correlated` option (default false: Mitsuba's separable Smith G).

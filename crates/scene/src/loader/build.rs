@@ -361,12 +361,17 @@ fn build_film(b: &Builder<'_>, idx: usize) -> Result<FilmDesc, LoadError> {
             filter = Some(build_rfilter(b, n)?);
         }
     }
+    let width_pos = p.pos_of("width");
+    let file = p.doc.file.clone();
     p.finish()?;
-    Ok(FilmDesc {
+    let film = FilmDesc {
         width: width as u32,
         height: height as u32,
         filter: filter.unwrap_or(FilterDesc::Gaussian { stddev: 0.5 }),
-    })
+    };
+    film.check_size()
+        .map_err(|e| LoadError::at(&file, width_pos, e))?;
+    Ok(film)
 }
 
 /// `box` and `gaussian` (`src/rfilters/`).
@@ -424,7 +429,9 @@ fn build_sampler(b: &Builder<'_>, idx: usize) -> Result<SamplerDesc, LoadError> 
             )))
         }
     };
-    let sample_count = p.int("sample_count", 4, U32.0, U32.1)?;
+    // Mitsuba takes any uint32; radia's bound keeps the samplers' rounding within one.
+    let max = SamplerKind::MAX_SAMPLE_COUNT as i64;
+    let sample_count = p.int("sample_count", 4, U32.0, max)?;
     if sample_count == 0 {
         return Err(p.err_at(p.pos_of("sample_count"), "sample_count must be at least 1"));
     }

@@ -123,6 +123,12 @@ fn envmap(b: &Builder<'_>, p: &mut Props<'_>) -> Result<EmitterDesc, LoadError> 
         return Err(p.err_at(p.pos_of("filename"), "envmap: the image is empty"));
     }
     let scale = p.float("scale", 1.0)?;
+    if !(scale.is_finite() && scale >= 0.0) {
+        return Err(p.err_at(
+            p.pos_of("scale"),
+            format!("envmap: \"scale\" must be a finite number >= 0, got {scale}"),
+        ));
+    }
     let to_world = p.transform("to_world")?;
     // radia samples and evaluates the map through a rotation only (a scaled or sheared frame
     // would distort Mitsuba's mapping in ways radia does not reproduce).

@@ -19,11 +19,31 @@ pub(crate) fn srgb_to_linear(v: f32) -> f32 {
     }
 }
 
-/// Reads `path` as linear RGB.
+/// Reads `path` as linear RGB. A NaN or infinite pixel is an error: it would light (or
+/// colour) the scene with NaN.
 pub(crate) fn read_rgb_image(path: &Path) -> Result<RgbImage, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read image file: {e}"))?;
+    let bytes = super::read_regular_file(path).map_err(|e| format!("cannot read image file: {e}"))?;
+    decode_rgb_image(&bytes)
+}
+
+/// [`read_rgb_image`] of a file's bytes (the fuzzing entry point: no disk access).
+pub fn decode_rgb_image(bytes: &[u8]) -> Result<RgbImage, String> {
+    let image = decode(bytes)?;
+    if let Some(i) = image.pixels.iter().position(|p| !p.is_finite()) {
+        let w = image.width.max(1) as usize;
+        return Err(format!(
+            "pixel ({}, {}) is not finite ({:?})",
+            i % w,
+            i / w,
+            image.pixels[i]
+        ));
+    }
+    Ok(image)
+}
+
+fn decode(bytes: &[u8]) -> Result<RgbImage, String> {
     if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
-        read_exr(path)
+        read_exr(bytes)
     } else if bytes.starts_with(b"\x89PNG") || bytes.starts_with(b"#?") {
         let srgb = bytes.starts_with(b"\x89PNG");
         let format = if srgb {
@@ -31,7 +51,7 @@ pub(crate) fn read_rgb_image(path: &Path) -> Result<RgbImage, String> {
         } else {
             image::ImageFormat::Hdr
         };
-        let img = image::load_from_memory_with_format(&bytes, format)
+        let img = image::load_from_memory_with_format(bytes, format)
             .map_err(|e| format!("cannot decode image: {e}"))?;
         let rgb = img.to_rgb32f();
         let decode = |v: f32| if srgb { srgb_to_linear(v) } else { v };
@@ -61,9 +81,9 @@ pub(crate) struct TextureImage {
 /// linear either way.
 pub(crate) fn read_texture_image(path: &Path, raw: bool) -> Result<TextureImage, String> {
     use image::DynamicImage as D;
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read image file: {e}"))?;
+    let bytes = super::read_regular_file(path).map_err(|e| format!("cannot read image file: {e}"))?;
     if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
-        let rgb = read_exr(path)?;
+        let rgb = read_exr(&bytes)?;
         return Ok(TextureImage {
             width: rgb.width as usize,
             height: rgb.height as usize,
@@ -126,18 +146,32 @@ pub(crate) fn read_texture_image(path: &Path, raw: bool) -> Result<TextureImage,
     })
 }
 
-fn read_exr(path: &Path) -> Result<RgbImage, String> {
+fn read_exr(bytes: &[u8]) -> Result<RgbImage, String> {
     use exr::prelude::*;
-    let image = read_first_rgba_layer_from_file(
-        path,
-        |size: Vec2<usize>, _: &RgbaChannels| (size.width(), vec![Vec3::ZERO; size.area()]),
-        |(w, px): &mut (usize, Vec<Vec3>),
-         Vec2(x, y): Vec2<usize>,
-         (r, g, b, _): (f32, f32, f32, f32)| {
-            px[y * *w + x] = Vec3::new(r, g, b);
-        },
-    )
-    .map_err(|e| format!("cannot read OpenEXR image: {e}"))?;
+    // The header first: the pixel buffer below is allocated from its size, which must fit.
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+        .map_err(|e| format!("cannot read OpenEXR image: {e}"))?;
+    for h in &meta.headers {
+        let size = h.layer_size;
+        let bytes = size.width() as u128 * size.height() as u128 * 12;
+        let what = format!("the {}x{} image", size.width(), size.height());
+        crate::memory::check_fits(bytes, &what)?;
+    }
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |size: Vec2<usize>, _: &RgbaChannels| (size.width(), vec![Vec3::ZERO; size.area()]),
+            |(w, px): &mut (usize, Vec<Vec3>),
+             Vec2(x, y): Vec2<usize>,
+             (r, g, b, _): (f32, f32, f32, f32)| {
+                px[y * *w + x] = Vec3::new(r, g, b);
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| format!("cannot read OpenEXR image: {e}"))?;
     let size = image.layer_data.size;
     Ok(RgbImage {
         width: size.width() as u32,

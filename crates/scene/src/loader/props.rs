@@ -164,6 +164,17 @@ impl<'a> Props<'a> {
                 format!("parameter \"{name}\" must be finite"),
             ));
         }
+        // Negative radiance, intensity or index of refraction has no physical meaning
+        // (Mitsuba's unbounded spectra accept it; radia refuses it as a typo).
+        if c.min_element() < 0.0 {
+            return Err(self.err_at(
+                self.node.props[i].pos,
+                format!(
+                    "parameter \"{name}\" must not be negative, got ({}, {}, {})",
+                    c.x, c.y, c.z
+                ),
+            ));
+        }
         Ok(c)
     }
 

@@ -58,7 +58,7 @@ pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<ShapeDesc, 
             };
             let path = resolve_path(&b.doc.dir, filename);
             let (file, line, col) = (&b.doc.file, p.node.pos.line, p.node.pos.col);
-            let data = std::fs::read(&path).map_err(|e| {
+            let data = super::read_regular_file(&path).map_err(|e| {
                 let what = if e.kind() == std::io::ErrorKind::NotFound { "not found".to_string() } else { e.to_string() };
                 LoadError::at(
                     file,
@@ -75,6 +75,11 @@ pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<ShapeDesc, 
                 ply::parse_ply(&data, flip_tex_coords, face_normals)
                     .map_err(|e| LoadError::in_file(&path, format!("{e} {here}")))?
             };
+            // Mitsuba builds an empty mesh; a file without faces is almost surely not the
+            // mesh meant (or not a mesh at all: an OBJ reader skips unknown lines).
+            if raw.indices.is_empty() {
+                return Err(LoadError::in_file(&path, format!("the file has no faces {here}")));
+            }
             let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into());
             mesh_geometry(b, &p, raw, &to_world, face_normals, flip_normals, &name)?
         }

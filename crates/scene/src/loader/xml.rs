@@ -182,7 +182,7 @@ fn nesting_exceeds(text: &str, max: usize) -> Option<usize> {
 
 /// Reads and parses `path`; `defines` act as Mitsuba's `-D name=value`.
 pub(crate) fn parse_file(path: &Path, defines: &[(String, String)]) -> Result<Doc, LoadError> {
-    let bytes = std::fs::read(path)
+    let bytes = super::read_regular_file(path)
         .map_err(|e| LoadError::in_file(path, format!("cannot read scene file: {e}")))?;
     let text = match String::from_utf8(bytes) {
         Ok(t) => t,
