@@ -353,7 +353,12 @@ impl Accel {
             let lanes = mask & 0xff;
             if lanes != 0 {
                 let analytic = self.analytic_lanes(base) & lanes;
-                let h = wide::intersect_triangles(&self.lanes, base, lanes & !analytic, wray, t_max);
+                let triangles = lanes & !analytic;
+                let h = if triangles != 0 {
+                    wide::intersect_triangles(&self.lanes, base, triangles, wray, t_max)
+                } else {
+                    wide::LaneHits::NONE
+                };
                 let mut hits = h.hit;
                 while hits != 0 {
                     let l = hits.trailing_zeros() as usize;

@@ -337,6 +337,17 @@ pub struct LaneHits {
     pub b2: [f32; 8],
 }
 
+impl LaneHits {
+    /// No lane tested (a group of analytic shapes only).
+    pub const NONE: LaneHits = LaneHits {
+        hit: 0,
+        exact: 0,
+        t: [0.0; 8],
+        b1: [0.0; 8],
+        b2: [0.0; 8],
+    };
+}
+
 /// The watertight test ([`WatertightRay::intersect`], the same operations in the same order,
 /// so the same bits) of the triangles `base..base + 8` selected by the low eight bits of
 /// `lanes`.
