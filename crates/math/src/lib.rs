@@ -4,6 +4,7 @@
 
 pub use glam::{self, Affine3A, Mat3, Mat4, UVec2, Vec2, Vec3, Vec3A, Vec4};
 
+pub mod float;
 mod frame;
 mod ray;
 pub mod trig;

@@ -373,8 +373,7 @@ impl Accel {
                 while one_by_one != 0 {
                     let l = one_by_one.trailing_zeros() as usize;
                     one_by_one &= one_by_one - 1;
-                    if let Some((t, b)) = self.intersect_prim(shapes, wray, ray, base + l, t_max)
-                    {
+                    if let Some((t, b)) = self.intersect_prim(shapes, wray, ray, base + l, t_max) {
                         t_max = t;
                         best = Some(((base + l) as u32, t));
                         *bary = b;
@@ -421,10 +420,15 @@ impl Accel {
         let wray = WatertightRay::new(ray);
         let node_ray = wide::NodeRay::new(ray.o, ray.d, ray.t_max);
         let mut bary = Vec2::ZERO;
-        let (prim, t) =
-            wide::traverse(&self.bvh, &node_ray, ray.t_max, false, |base, mask, t_max| {
+        let (prim, t) = wide::traverse(
+            &self.bvh,
+            &node_ray,
+            ray.t_max,
+            false,
+            |base, mask, t_max| {
                 self.intersect_leaves(shapes, &wray, ray, base, mask, t_max, false, &mut bary)
-            })?;
+            },
+        )?;
         Some(Hit { t, prim, bary })
     }
 
@@ -437,9 +441,15 @@ impl Accel {
         let wray = WatertightRay::new(ray);
         let node_ray = wide::NodeRay::new(ray.o, ray.d, ray.t_max);
         let mut bary = Vec2::ZERO;
-        wide::traverse(&self.bvh, &node_ray, ray.t_max, true, |base, mask, t_max| {
-            self.intersect_leaves(shapes, &wray, ray, base, mask, t_max, true, &mut bary)
-        })
+        wide::traverse(
+            &self.bvh,
+            &node_ray,
+            ray.t_max,
+            true,
+            |base, mask, t_max| {
+                self.intersect_leaves(shapes, &wray, ray, base, mask, t_max, true, &mut bary)
+            },
+        )
         .is_some()
     }
 

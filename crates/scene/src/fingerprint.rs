@@ -132,7 +132,10 @@ mod tests {
     #[test]
     fn any_change_of_content_disagrees() {
         let a = load(SCENE, "c.xml");
-        let b = load(&SCENE.replace(r#"value="1"/>"#, r#"value="1.01"/>"#), "d.xml");
+        let b = load(
+            &SCENE.replace(r#"value="1"/>"#, r#"value="1.01"/>"#),
+            "d.xml",
+        );
         assert_ne!(a.fingerprint(), b.fingerprint());
         let mut c = a.clone();
         c.film.width = 9;

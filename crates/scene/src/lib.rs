@@ -24,9 +24,9 @@ use glam::Vec3;
 use radia_bsdf::{Bsdf, ShadingPoint};
 use radia_math::Ray;
 
-/// Ray offsets as Mitsuba's `Interaction::offset_p` (`include/mitsuba/render/interaction.h`):
-/// the origin moves along the geometric normal by (1 + max|p|) · 1500 · 2⁻²⁴, and shadow rays
-/// stop short by a ten times larger relative epsilon.
+/// Mitsuba's relative ray epsilon (`include/mitsuba/core/constants.h`: 1500 · 2⁻²⁴). Ray
+/// origins are not offset by it (see [`offset_origin`]); it survives as the relative amount
+/// by which shadow rays stop short of their target, [`SHADOW_EPSILON`], as in Mitsuba.
 pub const RAY_EPSILON: f32 = 1500.0 * f32::EPSILON / 2.0;
 pub const SHADOW_EPSILON: f32 = RAY_EPSILON * 10.0;
 
@@ -128,12 +128,34 @@ impl Scene {
     }
 }
 
-/// Offsets `p` along the geometric normal `n` towards the side `d` points to.
+/// Moves `p`, known up to the per-axis absolute error `p_error`, along the geometric normal
+/// `n` to the side `d` points to, just far enough that the true surface is certainly behind
+/// it, then one float further (pbrt-v4's `OffsetRayOrigin`, `src/pbrt/interaction.h`).
+///
+/// Mitsuba offsets by (1 + max|p|) · 1500 · 2⁻²⁴ instead (`Interaction::offset_p`). That
+/// absolute 1 is half of a scene scaled by 10⁻⁴, and the 1500 ulps of |p| are metres in a
+/// scene translated by 10⁵; an offset from the error bound of the point itself is as small
+/// as it can safely be at every scale and position.
 #[inline]
-pub fn offset_origin(p: Vec3, n: Vec3, d: Vec3) -> Vec3 {
-    let mag = (1.0 + p.abs().max_element()) * RAY_EPSILON;
-    let mag = if n.dot(d) >= 0.0 { mag } else { -mag };
-    p + n * mag
+pub fn offset_origin(p: Vec3, p_error: Vec3, n: Vec3, d: Vec3) -> Vec3 {
+    let dist = n.abs().dot(p_error);
+    let offset = if n.dot(d) >= 0.0 { n * dist } else { -n * dist };
+    let po = p + offset;
+    // Round away from p, so that the rounding of the addition cannot undo the offset.
+    let away = |x: f32, o: f32| {
+        if o > 0.0 {
+            x.next_up()
+        } else if o < 0.0 {
+            x.next_down()
+        } else {
+            x
+        }
+    };
+    Vec3::new(
+        away(po.x, offset.x),
+        away(po.y, offset.y),
+        away(po.z, offset.z),
+    )
 }
 
 impl SurfaceInteraction {
@@ -152,16 +174,30 @@ impl SurfaceInteraction {
     /// A ray leaving the surface in the world-space direction `d`.
     #[inline]
     pub fn spawn_ray(&self, d: Vec3) -> Ray {
-        Ray::new(offset_origin(self.p, self.n, d), d, f32::INFINITY)
+        Ray::new(
+            offset_origin(self.p, self.p_error, self.n, d),
+            d,
+            f32::INFINITY,
+        )
     }
 
-    /// A shadow ray towards `target`, stopping just short of it.
+    /// A shadow ray towards the exactly known point `target` (a point light's position),
+    /// stopping just short of it.
     #[inline]
     pub fn spawn_ray_to(&self, target: Vec3) -> Ray {
-        let o = offset_origin(self.p, self.n, target - self.p);
-        let delta = target - o;
-        let dist = delta.length();
-        Ray::new(o, delta / dist, dist * (1.0 - SHADOW_EPSILON))
+        let o = offset_origin(self.p, self.p_error, self.n, target - self.p);
+        shadow_ray(o, target)
+    }
+
+    /// A shadow ray towards the point `target` on a surface with geometric normal
+    /// `target_n`, known up to `target_error`: both ends are offset off their surfaces
+    /// (pbrt-v4's `SpawnRayTo` between two interactions), so that neither the surface left
+    /// nor the one aimed at can occlude it.
+    #[inline]
+    pub fn spawn_ray_to_surface(&self, target: Vec3, target_n: Vec3, target_error: Vec3) -> Ray {
+        let o = offset_origin(self.p, self.p_error, self.n, target - self.p);
+        let t = offset_origin(target, target_error, target_n, o - target);
+        shadow_ray(o, t)
     }
 
     /// A shadow ray in direction `d` towards something at infinity.
@@ -169,4 +205,13 @@ impl SurfaceInteraction {
     pub fn spawn_ray_towards_infinity(&self, d: Vec3) -> Ray {
         self.spawn_ray(d)
     }
+}
+
+/// The ray from `o` to `target`, stopping the relative [`SHADOW_EPSILON`] short of it as
+/// Mitsuba's `Interaction::spawn_ray_to` does.
+#[inline]
+fn shadow_ray(o: Vec3, target: Vec3) -> Ray {
+    let delta = target - o;
+    let dist = delta.length();
+    Ray::new(o, delta / dist, dist * (1.0 - SHADOW_EPSILON))
 }

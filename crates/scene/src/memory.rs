@@ -76,7 +76,10 @@ mod tests {
             ..FilmDesc::default()
         };
         let e = film.check_size().unwrap_err();
-        assert!(e.contains("4000000000x4000000000 film needs 721.6 EiB"), "{e}");
+        assert!(
+            e.contains("4000000000x4000000000 film needs 721.6 EiB"),
+            "{e}"
+        );
         assert!(FilmDesc::default().check_size().is_ok());
     }
 

@@ -6,6 +6,7 @@ use crate::accel::{Hit, Primitive};
 use crate::description::{Geometry, Mesh};
 use crate::spherical::{sample_spherical_triangle, triangle_solid_angle};
 use glam::{Affine3A, Vec2, Vec3};
+use radia_math::float::gamma;
 use radia_math::{Frame, INV_TWO_PI, PI};
 use radia_sampling::warp;
 
@@ -39,6 +40,9 @@ pub struct Shape {
 #[derive(Clone, Copy, Debug)]
 pub struct SurfaceInteraction {
     pub p: Vec3,
+    /// Per-axis bound on the absolute rounding error of `p`: how far the true surface may be
+    /// from it, which decides how far a ray leaving it is offset ([`crate::offset_origin`]).
+    pub p_error: Vec3,
     pub t: f32,
     /// Geometric normal (flipped with `flip_normals`), unit length.
     pub n: Vec3,
@@ -61,6 +65,8 @@ pub struct SurfaceInteraction {
 #[derive(Clone, Copy, Debug)]
 pub struct PositionSample {
     pub p: Vec3,
+    /// Per-axis bound on the rounding error of `p` (as [`SurfaceInteraction::p_error`]).
+    pub p_error: Vec3,
     pub n: Vec3,
     /// Density per unit area.
     pub pdf: f32,
@@ -136,15 +142,15 @@ impl Shape {
         d: Vec3,
     ) -> SurfaceInteraction {
         let mut face = 0;
-        let (p, n, sh_n, dpdu, dpdv, uv) = match (&self.kind, prim) {
+        let (p, p_error, n, sh_n, dpdu, dpdv, uv) = match (&self.kind, prim) {
             (ShapeKind::Mesh(mesh), Primitive::Triangle { p: v, face: f, .. }) => {
                 face = *f;
                 let idx = mesh.indices[face as usize];
                 let (b1, b2) = (hit.bary.x, hit.bary.y);
                 let b0 = 1.0 - b1 - b2;
-                let p = v[0] * b0 + v[1] * b1 + v[2] * b2;
                 let dp0 = v[1] - v[0];
                 let dp1 = v[2] - v[0];
+                let (p, p_error) = triangle_point(v[0], dp0, dp1, b1, b2);
                 let n_face = dp0.cross(dp1).normalize();
                 let mut n = n_face;
                 let mut sh_n = match &mesh.normals {
@@ -189,7 +195,7 @@ impl Shape {
                     }
                     None => (Vec2::new(b1, b2), dp0, dp1),
                 };
-                (p, n, sh_n, dpdu, dpdv, uv)
+                (p, p_error, n, sh_n, dpdu, dpdv, uv)
             }
             (
                 ShapeKind::Sphere {
@@ -204,6 +210,7 @@ impl Shape {
                 // Reproject onto the surface for accuracy.
                 local *= *radius / local.length();
                 let p = *center + local;
+                let p_error = sphere_point_error(*center, local);
                 let mut n = local / *radius;
                 let mut u = radia_math::trig::atan2(local.y, local.x) * INV_TWO_PI;
                 if u < 0.0 {
@@ -222,7 +229,7 @@ impl Shape {
                 if *flip_normals {
                     n = -n;
                 }
-                (p, n, n, dpdu, dpdv, Vec2::new(u, v))
+                (p, p_error, n, n, dpdu, dpdv, Vec2::new(u, v))
             }
             (
                 ShapeKind::Disk {
@@ -236,6 +243,7 @@ impl Shape {
                 let pw = ray_o + d * hit.t;
                 let local = to_local.transform_point3(pw);
                 let p = to_world.transform_point3(Vec3::new(local.x, local.y, 0.0));
+                let p_error = disk_point_error(to_world, local);
                 let r = (local.x * local.x + local.y * local.y).sqrt();
                 let mut v = radia_math::trig::atan2(local.y, local.x) * INV_TWO_PI;
                 if v < 0.0 {
@@ -251,13 +259,14 @@ impl Shape {
                 let dpdv =
                     to_world.transform_vector3(Vec3::new(-local.y, local.x, 0.0) * (2.0 * PI));
                 let n = if *flip_normals { -*normal } else { *normal };
-                (p, n, n, dpdu, dpdv, Vec2::new(r, v))
+                (p, p_error, n, n, dpdu, dpdv, Vec2::new(r, v))
             }
             _ => unreachable!("primitive and shape kinds always agree"),
         };
         let frame = Frame::from_normal_tangent(sh_n, dpdu);
         SurfaceInteraction {
             p,
+            p_error,
             t: hit.t,
             n,
             frame,
@@ -336,9 +345,10 @@ impl Shape {
             ShapeKind::Mesh(mesh) => {
                 let v = mesh_triangle(mesh, face);
                 let b = warp::square_to_uniform_triangle(u);
-                let p = v[0] * (1.0 - b.x - b.y) + v[1] * b.x + v[2] * b.y;
+                let (p, p_error) = triangle_point(v[0], v[1] - v[0], v[2] - v[0], b.x, b.y);
                 PositionSample {
                     p,
+                    p_error,
                     n: mesh_normal(mesh, &v),
                     pdf: 1.0 / triangle_area(&v),
                 }
@@ -352,6 +362,7 @@ impl Shape {
                 let n = if *flip_normals { -local } else { local };
                 PositionSample {
                     p: *center + local * *radius,
+                    p_error: sphere_point_error(*center, local * *radius),
                     n,
                     pdf: 1.0 / self.area,
                 }
@@ -363,10 +374,12 @@ impl Shape {
                 ..
             } => {
                 let q = warp::square_to_uniform_disk_concentric(u);
-                let p = to_world.transform_point3(Vec3::new(q.x, q.y, 0.0));
+                let local = Vec3::new(q.x, q.y, 0.0);
+                let p = to_world.transform_point3(local);
                 let n = if *flip_normals { -*normal } else { *normal };
                 PositionSample {
                     p,
+                    p_error: disk_point_error(to_world, local),
                     n,
                     pdf: 1.0 / self.area,
                 }
@@ -398,12 +411,13 @@ impl Shape {
                 let v = mesh_triangle(mesh, face);
                 if let Some(omega) = spherical_sampling(&v, ref_p) {
                     let b = sample_spherical_triangle(&v, ref_p, u)?;
-                    let p = v[0] * b[0] + v[1] * b[1] + v[2] * b[2];
+                    let (p, p_error) = triangle_point(v[0], v[1] - v[0], v[2] - v[0], b[1], b[2]);
                     let delta = p - ref_p;
                     let dist = delta.length();
                     let d = delta / dist;
                     return d.is_finite().then(|| DirectionSample {
                         p,
+                        p_error,
                         n: mesh_normal(mesh, &v),
                         d,
                         dist,
@@ -421,6 +435,7 @@ impl Shape {
         let pdf = ps.pdf * dist2 / ps.n.dot(d).abs();
         (pdf.is_finite() && pdf > 0.0).then_some(DirectionSample {
             p: ps.p,
+            p_error: ps.p_error,
             n: ps.n,
             d,
             dist,
@@ -499,6 +514,57 @@ fn spherical_sampling(v: &[Vec3; 3], p: Vec3) -> Option<f32> {
     (MIN_SPHERICAL_SAMPLE_AREA..=MAX_SPHERICAL_SAMPLE_AREA)
         .contains(&omega)
         .then_some(omega)
+}
+
+/// The point v0 + b1·e1 + b2·e2 of a triangle with edges e1 = v1 − v0, e2 = v2 − v0, and
+/// the bound on how far the surface may be from it, as the intersection test sees it.
+///
+/// * Written from v0 rather than as b0·v0 + b1·v1 + b2·v2 (pbrt-v4, `src/pbrt/shapes.h`,
+///   bound γ₇ Σ|bᵢ vᵢ|): errors of the barycentrics then move the point within the
+///   triangle's plane, and off it there is only the rounding of the final addition, γ₁|p|
+///   (far from the origin, one ulp of |p| where the other form needs several: more than the
+///   gap between a light and the ceiling it hangs under, in a room translated by 10⁵).
+/// * The ray/triangle test itself finds t = 0 for an origin on the triangle only up to a
+///   few ulps of the vertices' distances along the ray, whatever the triangle's tilt: a
+///   ray leaving a floor rotated into place (its plane 10⁻¹⁶ off y = 0) hit that floor
+///   again at t ≈ 10⁻⁸, shading its far end 15% dark. pbrt-v4 rejects t below that error
+///   inside the test (`Triangle::Intersect`, `deltaT`); radia's 8-wide test stays lean and
+///   the origin is moved off by it instead, in every direction: γ₃₂ of the edges' extent,
+///   a margin over pbrt's bound (Mitsuba's absolute 1 · 1500 · 2⁻²⁴ plays this part there).
+#[inline]
+fn triangle_point(v0: Vec3, e1: Vec3, e2: Vec3, b1: f32, b2: f32) -> (Vec3, Vec3) {
+    let p = v0 + (e1 * b1 + e2 * b2);
+    let extent = (e1.abs() + e2.abs()).max_element();
+    (p, p.abs() * gamma(1) + Vec3::splat(extent * gamma(32)))
+}
+
+/// Error bound of `center + local` where `local` was reprojected onto the sphere (pbrt-v4's
+/// γ₅|p| for the reprojected object-space point, `Sphere`, here γ₈ for the intersection
+/// test's own rounding relative to the radius, plus the translation).
+#[inline]
+fn sphere_point_error(center: Vec3, local: Vec3) -> Vec3 {
+    local.abs() * gamma(8) + (center + local).abs() * gamma(1)
+}
+
+/// Error bound of a disk's point `to_world · (x, y, 0)`: the transform's own rounding
+/// (pbrt-v4's `Transform::operator()(Point3fi)`: γ₃ (|M| |p| + |t|)), doubled for the
+/// intersection test's own transform of the ray into local space. The error of the local
+/// x, y found from the hit moves the point within the disk's plane, which does not matter.
+#[inline]
+fn disk_point_error(to_world: &Affine3A, local: Vec3) -> Vec3 {
+    let m = to_world.matrix3;
+    let abs_m = glam::Mat3A::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
+    let mapped = Vec3::from(abs_m * glam::Vec3A::from(local.abs()));
+    let t = Vec3::from(to_world.translation.abs());
+    (mapped + t) * gamma(12)
+}
+
+/// Error bound of a point `ref_p + d·t` found on a sphere by the cone sampler: relative to
+/// the magnitudes involved (the ray's origin and reach, the centre and radius), with room for
+/// the root and the direction's few operations.
+#[inline]
+fn cone_point_error(ref_p: Vec3, reach: Vec3, center: Vec3, radius: f32) -> Vec3 {
+    (ref_p.abs() + reach.abs() + center.abs() + Vec3::splat(radius)) * gamma(16)
 }
 
 #[inline]
@@ -582,6 +648,7 @@ impl SphereCone {
         let outward = (p - center).normalize();
         (t.is_finite() && t > 0.0).then(|| DirectionSample {
             p,
+            p_error: cone_point_error(ref_p, d * t, center, radius),
             n: if flip_normals { -outward } else { outward },
             d,
             dist: t,
@@ -594,6 +661,8 @@ impl SphereCone {
 #[derive(Clone, Copy, Debug)]
 pub struct DirectionSample {
     pub p: Vec3,
+    /// Per-axis bound on the rounding error of `p` (as [`SurfaceInteraction::p_error`]).
+    pub p_error: Vec3,
     /// Geometric normal at `p` (flipped with `flip_normals`).
     pub n: Vec3,
     /// Unit direction from the reference point to `p`.

@@ -53,6 +53,8 @@ impl AreaLight {
             d: ds.d,
             dist: ds.dist,
             p: ds.p,
+            n: ds.n,
+            p_error: ds.p_error,
             pdf: ds.pdf,
             radiance,
             is_delta: false,

@@ -24,6 +24,8 @@ impl ConstantLight {
             d: warp::square_to_uniform_sphere(u),
             dist: f32::INFINITY,
             p: Vec3::ZERO,
+            n: Vec3::ZERO,
+            p_error: Vec3::ZERO,
             pdf: warp::uniform_sphere_pdf(),
             radiance: self.radiance,
             is_delta: false,

@@ -28,6 +28,8 @@ impl DirectionalLight {
             d: -self.direction,
             dist: f32::INFINITY,
             p: Vec3::ZERO,
+            n: Vec3::ZERO,
+            p_error: Vec3::ZERO,
             pdf: 1.0,
             radiance: self.irradiance,
             is_delta: true,

@@ -313,6 +313,8 @@ impl Envmap {
             d,
             dist: f32::INFINITY,
             p: Vec3::ZERO,
+            n: Vec3::ZERO,
+            p_error: Vec3::ZERO,
             pdf,
             radiance: self.eval_local(local),
             is_delta: false,

@@ -62,6 +62,11 @@ pub struct EmitterSample {
     pub dist: f32,
     /// Point on the emitter (finite emitters only).
     pub p: Vec3,
+    /// Geometric normal at `p` on an area light; zero for point lights and lights at
+    /// infinity.
+    pub n: Vec3,
+    /// Per-axis bound on the rounding error of `p` (zero where `p` is exact: point lights).
+    pub p_error: Vec3,
     /// Solid-angle density of `d` (1 for delta lights). From [`Emitter::sample_direction`] it
     /// excludes the choice of the light; from `Scene::sample_emitter_direction` it includes it.
     pub pdf: f32,

@@ -32,6 +32,8 @@ impl PointLight {
             d: delta / dist,
             dist,
             p: self.position,
+            n: Vec3::ZERO,
+            p_error: Vec3::ZERO,
             pdf: 1.0,
             radiance: self.intensity / dist2,
             is_delta: true,

@@ -97,6 +97,8 @@ impl SpotLight {
             d,
             dist,
             p: self.position,
+            n: Vec3::ZERO,
+            p_error: Vec3::ZERO,
             pdf: 1.0,
             radiance: self.intensity * (falloff / dist2),
             is_delta: true,

@@ -22,7 +22,8 @@ pub(crate) fn srgb_to_linear(v: f32) -> f32 {
 /// Reads `path` as linear RGB. A NaN or infinite pixel is an error: it would light (or
 /// colour) the scene with NaN.
 pub(crate) fn read_rgb_image(path: &Path) -> Result<RgbImage, String> {
-    let bytes = super::read_regular_file(path).map_err(|e| format!("cannot read image file: {e}"))?;
+    let bytes =
+        super::read_regular_file(path).map_err(|e| format!("cannot read image file: {e}"))?;
     decode_rgb_image(&bytes)
 }
 
@@ -81,7 +82,8 @@ pub(crate) struct TextureImage {
 /// linear either way.
 pub(crate) fn read_texture_image(path: &Path, raw: bool) -> Result<TextureImage, String> {
     use image::DynamicImage as D;
-    let bytes = super::read_regular_file(path).map_err(|e| format!("cannot read image file: {e}"))?;
+    let bytes =
+        super::read_regular_file(path).map_err(|e| format!("cannot read image file: {e}"))?;
     if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
         let rgb = read_exr(&bytes)?;
         return Ok(TextureImage {
@@ -146,12 +148,29 @@ pub(crate) fn read_texture_image(path: &Path, raw: bool) -> Result<TextureImage,
     })
 }
 
+/// The most decoded bytes (12 per RGB float pixel) an OpenEXR file may claim per byte of file.
+const MAX_EXR_EXPANSION: u128 = 65536;
+
 fn read_exr(bytes: &[u8]) -> Result<RgbImage, String> {
     use exr::prelude::*;
     // The header first: the pixel buffer below is allocated from its size, which must fit.
     let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
         .map_err(|e| format!("cannot read OpenEXR image: {e}"))?;
     for h in &meta.headers {
+        // No OpenEXR compression stores more than a few thousand pixel bytes per file byte
+        // (deflate's limit is 1032:1, RLE's 64:1), so a header claiming over 65536 times the
+        // file's size is corrupt: say so before allocating what it claims (found by fuzzing:
+        // 442 bytes whose data window, xmax < xmin, read as a 4·10⁹ × 3 image).
+        let claimed = h.layer_size.width() as u128 * h.layer_size.height() as u128 * 12;
+        if claimed > bytes.len() as u128 * MAX_EXR_EXPANSION {
+            return Err(format!(
+                "corrupt OpenEXR image: the header declares {}x{} pixels, more than a \
+                 {}-byte file can hold",
+                h.layer_size.width(),
+                h.layer_size.height(),
+                bytes.len()
+            ));
+        }
         let size = h.layer_size;
         let bytes = size.width() as u128 * size.height() as u128 * 12;
         let what = format!("the {}x{} image", size.width(), size.height());

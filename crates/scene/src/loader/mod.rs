@@ -29,8 +29,8 @@ mod xml;
 #[cfg(test)]
 mod tests;
 
-pub use error::{LoadError, TextPos};
 pub use self::image::decode_rgb_image;
+pub use error::{LoadError, TextPos};
 
 use crate::{Mesh, SceneDescription};
 use glam::DMat4;
@@ -117,8 +117,15 @@ pub(crate) fn read_regular_file(path: &Path) -> std::io::Result<Vec<u8>> {
     }
     let meta = std::fs::metadata(path)?;
     if !meta.is_file() {
-        let what = if meta.is_dir() { "a directory" } else { "not a regular file" };
-        return Err(std::io::Error::other(format!("{} is {what}", path.display())));
+        let what = if meta.is_dir() {
+            "a directory"
+        } else {
+            "not a regular file"
+        };
+        return Err(std::io::Error::other(format!(
+            "{} is {what}",
+            path.display()
+        )));
     }
     std::fs::read(path)
 }

@@ -113,17 +113,18 @@ fn bitmap(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Texture, LoadError> {
     let raw = p.boolean("raw", false)?;
     let _ = p.boolean("accel", true)?;
     let filter_pos = p.pos_of("filter_type");
-    let filter =
-        match p.string_opt("filter_type")?.unwrap_or("bilinear") {
-            "bilinear" => FilterType::Bilinear,
-            "nearest" => FilterType::Nearest,
-            other => return Err(p.err_at(
+    let filter = match p.string_opt("filter_type")?.unwrap_or("bilinear") {
+        "bilinear" => FilterType::Bilinear,
+        "nearest" => FilterType::Nearest,
+        other => {
+            return Err(p.err_at(
                 filter_pos,
                 format!(
                     "invalid filter type \"{other}\", must be one of: \"nearest\", or \"bilinear\""
                 ),
-            )),
-        };
+            ))
+        }
+    };
     let wrap_pos = p.pos_of("wrap_mode");
     let wrap = match p.string_opt("wrap_mode")?.unwrap_or("repeat") {
         "repeat" => WrapMode::Repeat,
