@@ -6,7 +6,9 @@ use radia_scene::loader::fuzzing;
 use std::path::Path;
 
 fn replay(target: &str, entry: fn(&[u8])) {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/regressions").join(target);
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../fuzz/regressions")
+        .join(target);
     let mut n = 0;
     for e in std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display())) {
         let path = e.unwrap().path();
@@ -37,4 +39,17 @@ fn obj_regressions() {
 #[test]
 fn image_regressions() {
     replay("image", fuzzing::image);
+}
+
+/// Found by `cargo fuzz run image` (libFuzzer: out-of-memory, a 10.9 GB allocation): 442
+/// bytes whose data window (xmax < xmin) reads as a 4·10⁹ × 3 image. It is refused as corrupt
+/// before any pixel buffer is allocated.
+#[test]
+fn exr_declaring_more_pixels_than_the_file_holds_is_refused_before_allocating() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../fuzz/regressions/image/oom-huge-data-window.exr");
+    let err = radia_scene::loader::decode_rgb_image(&std::fs::read(path).unwrap())
+        .err()
+        .expect("a truncated EXR must not decode");
+    assert!(err.contains("corrupt OpenEXR image"), "{err}");
 }
