@@ -249,10 +249,24 @@ fn renders_a_gltf_file_by_its_extension() {
     assert!(out_path.exists());
 
     // --camera names a camera the file does not have: an error naming the file.
-    let out = radia(&["render", path.to_str().unwrap(), "-o", out_path.to_str().unwrap(), "--camera", "2", "-q"]);
+    let out = radia(&[
+        "render",
+        path.to_str().unwrap(),
+        "-o",
+        out_path.to_str().unwrap(),
+        "--camera",
+        "2",
+        "-q",
+    ]);
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success() && out.status.code() != Some(101), "{stderr}");
-    assert!(stderr.contains("triangle.gltf") && stderr.contains("there is no camera 2"), "{stderr}");
+    assert!(
+        !out.status.success() && out.status.code() != Some(101),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("triangle.gltf") && stderr.contains("there is no camera 2"),
+        "{stderr}"
+    );
     // glTF-only options on an XML scene are refused.
     let xml = dir.join("scene.xml");
     std::fs::write(&xml, GOOD_SCENE).unwrap();
@@ -266,17 +280,43 @@ fn malformed_gltf_is_an_error_not_a_panic() {
     let dir = temp_dir("bad-gltf");
     let out_path = dir.join("out.exr");
     for (name, body, needle) in [
-        ("truncated.glb", &b"glTF\x02\x00\x00\x00\x40\x00\x00\x00\x10\x00"[..], "GLB"),
-        ("broken.gltf", &b"<scene version=\"3.0.0\"/>"[..], "not a valid glTF JSON file"),
-        ("short.gltf", TRIANGLE_GLTF.replace("\"byteLength\": 36, \"uri\"", "\"byteLength\": 360, \"uri\"").as_bytes(), "fewer than its byteLength"),
+        (
+            "truncated.glb",
+            &b"glTF\x02\x00\x00\x00\x40\x00\x00\x00\x10\x00"[..],
+            "GLB",
+        ),
+        (
+            "broken.gltf",
+            &b"<scene version=\"3.0.0\"/>"[..],
+            "not a valid glTF JSON file",
+        ),
+        (
+            "short.gltf",
+            TRIANGLE_GLTF
+                .replace(
+                    "\"byteLength\": 36, \"uri\"",
+                    "\"byteLength\": 360, \"uri\"",
+                )
+                .as_bytes(),
+            "fewer than its byteLength",
+        ),
     ] {
         let path = dir.join(name);
         std::fs::write(&path, body).unwrap();
-        let out = radia(&["render", path.to_str().unwrap(), "-o", out_path.to_str().unwrap(), "-q"]);
+        let out = radia(&[
+            "render",
+            path.to_str().unwrap(),
+            "-o",
+            out_path.to_str().unwrap(),
+            "-q",
+        ]);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "{name}: {stderr}");
         assert_ne!(out.status.code(), Some(101), "{name}: panicked: {stderr}");
-        assert!(stderr.contains(name) && stderr.contains(needle), "{name}: {stderr}");
+        assert!(
+            stderr.contains(name) && stderr.contains(needle),
+            "{name}: {stderr}"
+        );
         assert!(!out_path.exists());
     }
 }

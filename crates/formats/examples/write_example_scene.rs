@@ -16,7 +16,9 @@ use serde_json::json;
 use std::path::Path;
 
 fn main() {
-    let out = std::env::args().nth(1).unwrap_or_else(|| "scenes/gltf/boxes.gltf".into());
+    let out = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "scenes/gltf/boxes.gltf".into());
     let out = Path::new(&out);
     let mut b = GltfBuilder::new();
     let materials = [
@@ -32,7 +34,9 @@ fn main() {
     }
     let floor = b.mesh(&QUAD, None, Some(&QUAD_INDICES), Some(0));
     let (cp, ci) = cube();
-    let cubes: Vec<usize> = (1..4).map(|m| b.mesh(&cp, None, Some(&ci), Some(m))).collect();
+    let cubes: Vec<usize> = (1..4)
+        .map(|m| b.mesh(&cp, None, Some(&ci), Some(m)))
+        .collect();
     let flat = Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2);
     b.push("nodes", json!({ "name": "floor", "mesh": floor, "rotation": flat.to_array(), "scale": [4.0, 4.0, 4.0] }));
     // A group of boxes, the group turned and lifted; each box placed within it.
@@ -44,7 +48,10 @@ fn main() {
     b.push("nodes", json!({ "name": "lamp", "mesh": cubes[2], "translation": [1.3, -0.3, -0.6], "scale": [0.2, 0.2, 0.2] }));
     b.push("cameras", json!({ "type": "perspective", "perspective": { "yfov": 0.7, "aspectRatio": 1.5, "znear": 0.05 } }));
     let cam = looking_at(Vec3::new(0.5, 2.5, 5.5), Vec3::new(0.0, 0.3, 0.0), Vec3::Y);
-    b.push("nodes", json!({ "name": "camera", "camera": 0, "matrix": cam }));
+    b.push(
+        "nodes",
+        json!({ "name": "camera", "camera": 0, "matrix": cam }),
+    );
     b.use_extension("KHR_lights_punctual", false);
     b.use_extension("KHR_materials_emissive_strength", false);
     b.json["extensions"] = json!({ "KHR_lights_punctual": { "lights": [
@@ -53,11 +60,20 @@ fn main() {
         { "name": "sun", "type": "directional", "intensity": 0.5, "color": [0.8, 0.9, 1.0] }
     ] } });
     let light = |i: usize| json!({ "KHR_lights_punctual": { "light": i } });
-    b.push("nodes", json!({ "name": "bulb", "translation": [-1.5, 2.5, 1.5], "extensions": light(0) }));
+    b.push(
+        "nodes",
+        json!({ "name": "bulb", "translation": [-1.5, 2.5, 1.5], "extensions": light(0) }),
+    );
     let spot = looking_at(Vec3::new(1.0, 3.5, 1.0), Vec3::new(0.2, 0.5, 0.3), Vec3::Y);
-    b.push("nodes", json!({ "name": "spot", "matrix": spot, "extensions": light(1) }));
+    b.push(
+        "nodes",
+        json!({ "name": "spot", "matrix": spot, "extensions": light(1) }),
+    );
     let sun = looking_at(Vec3::ZERO, Vec3::new(0.5, -1.0, -0.3), Vec3::Y);
-    b.push("nodes", json!({ "name": "sun", "matrix": sun, "extensions": light(2) }));
+    b.push(
+        "nodes",
+        json!({ "name": "sun", "matrix": sun, "extensions": light(2) }),
+    );
     b.scene(&[0, 1, 5, 6, 7, 8]);
     let dir = out.parent().unwrap_or(Path::new("."));
     std::fs::create_dir_all(dir).unwrap();

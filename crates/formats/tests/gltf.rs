@@ -76,7 +76,9 @@ fn node_hierarchy_composes_parent_times_child_trs() {
     let mesh = mesh(&d, 0);
     // world = T(10,0,0) R_y(90°) S(2) · [T(0,0,1) S(0.5,1,1)]
     let world = glam::Mat4::from_scale_rotation_translation(Vec3::splat(2.0), r, Vec3::X * 10.0)
-        * glam::Mat4::from_cols_array(&[0.5, 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 1., 1.]);
+        * glam::Mat4::from_cols_array(&[
+            0.5, 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 1., 1.,
+        ]);
     for (p, q) in mesh.positions.iter().zip(QUAD) {
         let expect = world.transform_point3(Vec3::from_array(q));
         assert!(close(*p, expect, 1e-5), "{p} vs {expect}");
@@ -106,7 +108,10 @@ fn mirroring_node_keeps_front_faces_counter_clockwise() {
         for t in &mesh.indices {
             let [a, b2, c] = t.map(|i| mesh.positions[i as usize]);
             let ng = (b2 - a).cross(c - a).normalize();
-            assert!(close(ng, Vec3::Z * expect_z, 1e-6), "scale {scale:?}: geometric normal {ng}");
+            assert!(
+                close(ng, Vec3::Z * expect_z, 1e-6),
+                "scale {scale:?}: geometric normal {ng}"
+            );
             // The transformed shading normal agrees with the geometric one.
             let ns = mesh.normals.as_ref().unwrap()[t[0] as usize];
             assert!(close(ns, ng, 1e-6), "scale {scale:?}: shading normal {ns}");
@@ -134,17 +139,25 @@ fn non_indexed_strips_fans_and_points() {
     b.push("nodes", json!({ "mesh": 0 }));
     b.scene(&[0]);
     let (d, warnings) = load(&b.write(&dir, "modes", Container::DataUri));
-    let counts: Vec<usize> = (0..d.shapes.len()).map(|i| mesh(&d, i).indices.len()).collect();
+    let counts: Vec<usize> = (0..d.shapes.len())
+        .map(|i| mesh(&d, i).indices.len())
+        .collect();
     assert_eq!(counts, vec![1, 2, 2]);
     for i in 0..3 {
         let m = mesh(&d, i);
         for t in &m.indices {
             let [a, b2, c] = t.map(|k| m.positions[k as usize]);
-            assert!((b2 - a).cross(c - a).z > 0.0, "primitive {i}: triangle {t:?} faces −z");
+            assert!(
+                (b2 - a).cross(c - a).z > 0.0,
+                "primitive {i}: triangle {t:?} faces −z"
+            );
         }
     }
     assert_eq!(
-        warnings.iter().filter(|w| w.contains("point or line")).count(),
+        warnings
+            .iter()
+            .filter(|w| w.contains("point or line"))
+            .count(),
         1,
         "{warnings:?}"
     );
@@ -162,7 +175,10 @@ fn the_three_containers_give_the_same_scene() {
         "meshes",
         json!({ "primitives": [{ "attributes": { "POSITION": p, "NORMAL": n, "TEXCOORD_0": uvs }, "indices": ix }] }),
     );
-    b.push("nodes", json!({ "mesh": 0, "translation": [0.0, 0.0, -3.0] }));
+    b.push(
+        "nodes",
+        json!({ "mesh": 0, "translation": [0.0, 0.0, -3.0] }),
+    );
     b.scene(&[0]);
     let meshes: Vec<Mesh> = ALL_CONTAINERS
         .iter()
@@ -195,32 +211,59 @@ fn camera_yfov_aspect_and_placement() {
     b.json["scenes"][0]["nodes"] = json!([0, 1, 2]);
     let path = b.write(&dir, "camera", Container::External);
     let (d, warnings) = load(&path);
-    assert_eq!((d.film.width, d.film.height), (768, 384), "768 wide at aspect 2");
+    assert_eq!(
+        (d.film.width, d.film.height),
+        (768, 384),
+        "768 wide at aspect 2"
+    );
     // tan(x/2) = tan(yfov/2) · 2.
     let fov_x = 2.0 * (0.25f32.tan() * 2.0).atan();
     assert!((d.camera.fov_x_degrees - fov_x.to_degrees()).abs() < 1e-4);
     assert!(d.camera.far_clip.is_infinite() && d.camera.near_clip == 0.1);
-    assert_eq!(warnings.iter().filter(|w| w.contains("orthographic")).count(), 1);
+    assert_eq!(
+        warnings
+            .iter()
+            .filter(|w| w.contains("orthographic"))
+            .count(),
+        1
+    );
     let scene = Scene::build(d);
     let centre = scene.camera.generate_ray(Vec2::new(0.5, 0.5));
     assert!(close(centre.d, -Vec3::X, 1e-5), "looks along {}", centre.d);
-    assert!(close(centre.o, Vec3::new(-0.1, 0.0, 5.0), 1e-5), "starts at {}", centre.o);
+    assert!(
+        close(centre.o, Vec3::new(-0.1, 0.0, 5.0), 1e-5),
+        "starts at {}",
+        centre.o
+    );
     // Image right is the camera's +x (world −z after the rotation); image up its +y.
     let right = scene.camera.generate_ray(Vec2::new(1.0, 0.5));
-    assert!(right.d.z < -0.1 && right.d.y.abs() < 1e-5, "right edge {}", right.d);
+    assert!(
+        right.d.z < -0.1 && right.d.y.abs() < 1e-5,
+        "right edge {}",
+        right.d
+    );
     let top = scene.camera.generate_ray(Vec2::new(0.5, 0.0));
     assert!((top.d.y - 0.25f32.sin()).abs() < 1e-4, "top edge {}", top.d);
 
     // A resolution override keeps yfov vertical.
-    let opts = GltfOptions { resolution: Some((100, 100)), ..Default::default() };
+    let opts = GltfOptions {
+        resolution: Some((100, 100)),
+        ..Default::default()
+    };
     let (d, _) = load_gltf_with_warnings(&path, &opts).unwrap();
     assert_eq!((d.film.width, d.film.height), (100, 100));
     assert!((d.camera.fov_x_degrees - 0.5f32.to_degrees()).abs() < 1e-4);
 
     // --camera: the orthographic one and a missing one are errors.
     for (i, needle) in [(1, "orthographic"), (7, "there is no camera 7")] {
-        let opts = GltfOptions { camera: Some(i), ..Default::default() };
-        let e = load_gltf_with_warnings(&path, &opts).err().unwrap().to_string();
+        let opts = GltfOptions {
+            camera: Some(i),
+            ..Default::default()
+        };
+        let e = load_gltf_with_warnings(&path, &opts)
+            .err()
+            .unwrap()
+            .to_string();
         assert!(e.contains(needle), "{e}");
     }
 }
@@ -234,15 +277,25 @@ fn default_camera_frames_the_bounds() {
     let scene = Scene::build(d);
     let centre = scene.camera.generate_ray(Vec2::new(0.5, 0.5));
     // Looks at the centre (5, 2, 0) from direction (0, 1, 2)/√5, up +y.
-    assert!(close(centre.d, -Vec3::new(0.0, 1.0, 2.0).normalize(), 1e-5), "{}", centre.d);
+    assert!(
+        close(centre.d, -Vec3::new(0.0, 1.0, 2.0).normalize(), 1e-5),
+        "{}",
+        centre.d
+    );
     let t = (Vec3::new(5.0, 2.0, 0.0) - centre.o).dot(centre.d);
-    assert!(close(centre.o + centre.d * t, Vec3::new(5.0, 2.0, 0.0), 1e-4));
+    assert!(close(
+        centre.o + centre.d * t,
+        Vec3::new(5.0, 2.0, 0.0),
+        1e-4
+    ));
     // The bounding sphere (radius 2√2) just fits the 45° vertical field of view.
     let dist = (Vec3::new(5.0, 2.0, 0.0) - centre.o).length();
     let expect = 8f32.sqrt() / 22.5f32.to_radians().sin();
     assert!((dist - expect).abs() < 1e-2 * expect, "{dist} vs {expect}");
     // Every corner of the quad is in view.
-    let hit = scene.intersect(&centre).expect("the centre ray hits the quad");
+    let hit = scene
+        .intersect(&centre)
+        .expect("the centre ray hits the quad");
     assert!((hit.p - Vec3::new(5.0, 2.0, 0.0)).length() < 1e-3);
 }
 
@@ -275,8 +328,14 @@ fn metallic_roughness_maps_onto_cooktorrance_as_appendix_b() {
     let dir = test_dir("materials");
     let sp = ShadingPoint::default();
     let dirs = [
-        (Vec3::new(0.3, 0.1, 0.9).normalize(), Vec3::new(-0.5, 0.2, 0.7).normalize()),
-        (Vec3::new(0.0, 0.6, 0.4).normalize(), Vec3::new(0.1, -0.7, 0.5).normalize()),
+        (
+            Vec3::new(0.3, 0.1, 0.9).normalize(),
+            Vec3::new(-0.5, 0.2, 0.7).normalize(),
+        ),
+        (
+            Vec3::new(0.0, 0.6, 0.4).normalize(),
+            Vec3::new(0.1, -0.7, 0.5).normalize(),
+        ),
     ];
     // A metal: the whole BRDF is Appendix B's specular lobe with F0 = base colour.
     let base = [0.9f32, 0.6, 0.3];
@@ -288,7 +347,10 @@ fn metallic_roughness_maps_onto_cooktorrance_as_appendix_b() {
         );
         let (d, _) = load(&b.write(&dir, "metal", Container::Glb));
         let bsdf = &d.shapes[0].bsdf;
-        assert!(matches!(bsdf, Bsdf::CookTorrance(_)), "single-sided: {bsdf:?}");
+        assert!(
+            matches!(bsdf, Bsdf::CookTorrance(_)),
+            "single-sided: {bsdf:?}"
+        );
         for (v, l) in dirs {
             let got = bsdf.eval(&sp, v, l);
             let want = appendix_b_specular(Vec3::from_array(base), roughness, v, l);
@@ -313,9 +375,15 @@ fn metallic_roughness_maps_onto_cooktorrance_as_appendix_b() {
     for (v, l) in dirs {
         let want = appendix_b_specular(Vec3::splat(0.04), 0.5, v, l);
         let got = bsdf.eval(&sp, v, l);
-        assert!((got - want).abs().max_element() <= 1e-4 * want.max_element(), "{got} vs {want}");
+        assert!(
+            (got - want).abs().max_element() <= 1e-4 * want.max_element(),
+            "{got} vs {want}"
+        );
         let mirrored = bsdf.eval(&sp, Vec3::new(v.x, v.y, -v.z), Vec3::new(l.x, l.y, -l.z));
-        assert!((mirrored - got).abs().max_element() <= 1e-6, "double-sided back {mirrored}");
+        assert!(
+            (mirrored - got).abs().max_element() <= 1e-6,
+            "double-sided back {mirrored}"
+        );
     }
     // The default material (no "material"): base 1, metallic 1, roughness 1.
     let mut b = GltfBuilder::new();
@@ -326,7 +394,10 @@ fn metallic_roughness_maps_onto_cooktorrance_as_appendix_b() {
     let (v, l) = dirs[0];
     let want = appendix_b_specular(Vec3::ONE, 1.0, v, l);
     let got = d.shapes[0].bsdf.eval(&sp, v, l);
-    assert!((got - want).abs().max_element() <= 1e-4 * want.max_element(), "{got} vs {want}");
+    assert!(
+        (got - want).abs().max_element() <= 1e-4 * want.max_element(),
+        "{got} vs {want}"
+    );
 }
 
 #[test]
@@ -357,7 +428,10 @@ fn emission_strength_and_alpha_modes() {
         }
         let (d, warnings) = load(&material_quad(mat, None).write(&dir, "alpha", Container::Glb));
         assert_eq!(d.shapes.len(), kept as usize, "{mode} {alpha} {cutoff:?}");
-        assert_eq!(warnings.iter().any(|w| w.contains("BLEND")), mode == "BLEND");
+        assert_eq!(
+            warnings.iter().any(|w| w.contains("BLEND")),
+            mode == "BLEND"
+        );
     }
 }
 
@@ -399,41 +473,71 @@ fn punctual_lights_in_photometric_units() {
             { "type": "directional", "color": [0.5, 0.5, 0.5], "intensity": 3.0 }
         ]),
         &[
-            light_node(0, json!({ "translation": [1.0, 2.0, 3.0], "scale": [5.0, 5.0, 5.0] })),
-            light_node(1, json!({ "translation": [0.0, 4.0, 0.0], "rotation": down })),
+            light_node(
+                0,
+                json!({ "translation": [1.0, 2.0, 3.0], "scale": [5.0, 5.0, 5.0] }),
+            ),
+            light_node(
+                1,
+                json!({ "translation": [0.0, 4.0, 0.0], "rotation": down }),
+            ),
             json!({ "rotation": down, "children": [4] }),
             light_node(2, json!({})),
         ],
     );
     let (d, warnings) = load(&b.write(&dir, "lights", Container::External));
-    assert_eq!(d.emitters.len(), 3, "three lights and no default environment: {:?}", d.emitters);
+    assert_eq!(
+        d.emitters.len(),
+        3,
+        "three lights and no default environment: {:?}",
+        d.emitters
+    );
     match &d.emitters[0] {
         // candela → W/sr, one to one; the node's scale changes nothing.
-        EmitterDesc::Point { position, intensity } => {
+        EmitterDesc::Point {
+            position,
+            intensity,
+        } => {
             assert!(close(*position, Vec3::new(1.0, 2.0, 3.0), 1e-6));
             assert_eq!(*intensity, Vec3::new(100.0, 50.0, 25.0));
         }
         e => panic!("{e:?}"),
     }
     match &d.emitters[1] {
-        EmitterDesc::SmoothSpot { to_world, intensity, inner_cone_angle, outer_cone_angle } => {
+        EmitterDesc::SmoothSpot {
+            to_world,
+            intensity,
+            inner_cone_angle,
+            outer_cone_angle,
+        } => {
             assert_eq!(*intensity, Vec3::splat(8.0));
             assert!((inner_cone_angle - 0.2f32.to_degrees()).abs() < 1e-4);
             assert!((outer_cone_angle - 0.6f32.to_degrees()).abs() < 1e-4);
             assert!(close(to_world.transform_vector3(Vec3::Z), -Vec3::Y, 1e-6));
-            assert!(close(to_world.translation.into(), Vec3::new(0.0, 4.0, 0.0), 1e-6));
+            assert!(close(
+                to_world.translation.into(),
+                Vec3::new(0.0, 4.0, 0.0),
+                1e-6
+            ));
         }
         e => panic!("{e:?}"),
     }
     match &d.emitters[2] {
         // lux → W/m², one to one; the direction is inherited from the parent node.
-        EmitterDesc::Directional { direction, irradiance } => {
+        EmitterDesc::Directional {
+            direction,
+            irradiance,
+        } => {
             assert!(close(*direction, -Vec3::Y, 1e-6), "{direction}");
             assert_eq!(*irradiance, Vec3::splat(1.5));
         }
         e => panic!("{e:?}"),
     }
-    assert_eq!(warnings.iter().filter(|w| w.contains("range")).count(), 1, "{warnings:?}");
+    assert_eq!(
+        warnings.iter().filter(|w| w.contains("range")).count(),
+        1,
+        "{warnings:?}"
+    );
 
     // The spot as rendered: full intensity inside the inner cone, the smooth ramp between,
     // none outside, at the receiver's angle from the axis.
@@ -455,13 +559,32 @@ fn default_environment_only_without_lights() {
     let dir = test_dir("environment");
     let path = one_quad(json!({})).write(&dir, "unlit", Container::Glb);
     let (d, _) = load(&path);
-    assert_eq!(d.emitters, vec![EmitterDesc::Constant { radiance: Vec3::ONE }]);
-    for (env, expect) in [(Some(0.0f32), vec![]), (Some(2.5), vec![EmitterDesc::Constant { radiance: Vec3::splat(2.5) }])] {
-        let opts = GltfOptions { environment: env, ..Default::default() };
+    assert_eq!(
+        d.emitters,
+        vec![EmitterDesc::Constant {
+            radiance: Vec3::ONE
+        }]
+    );
+    for (env, expect) in [
+        (Some(0.0f32), vec![]),
+        (
+            Some(2.5),
+            vec![EmitterDesc::Constant {
+                radiance: Vec3::splat(2.5),
+            }],
+        ),
+    ] {
+        let opts = GltfOptions {
+            environment: env,
+            ..Default::default()
+        };
         let (d, _) = load_gltf_with_warnings(&path, &opts).unwrap();
         assert_eq!(d.emitters, expect);
     }
-    let opts = GltfOptions { environment: Some(-1.0), ..Default::default() };
+    let opts = GltfOptions {
+        environment: Some(-1.0),
+        ..Default::default()
+    };
     assert!(load_gltf_with_warnings(&path, &opts).is_err());
 }
 
@@ -472,14 +595,20 @@ fn extensions_required_error_and_used_warning() {
     b.use_extension("KHR_texture_transform", false);
     b.use_extension("EXT_meshopt_compression", false);
     let (_, warnings) = load(&b.write(&dir, "used", Container::Glb));
-    let w: Vec<_> = warnings.iter().filter(|w| w.contains("extension")).collect();
+    let w: Vec<_> = warnings
+        .iter()
+        .filter(|w| w.contains("extension"))
+        .collect();
     assert_eq!(w.len(), 1, "{warnings:?}");
     assert!(w[0].contains("KHR_texture_transform") && w[0].contains("EXT_meshopt_compression"));
 
     let mut b = one_quad(json!({}));
     b.use_extension("KHR_draco_mesh_compression", true);
     let e = load_err(&b.write(&dir, "required", Container::Glb));
-    assert!(e.contains("requires the extension KHR_draco_mesh_compression"), "{e}");
+    assert!(
+        e.contains("requires the extension KHR_draco_mesh_compression"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -516,18 +645,37 @@ fn malformed_files_give_errors_naming_file_and_problem() {
     let mut b = one_quad(json!({}));
     b.json["accessors"][0]["count"] = json!(40);
     let e = load_err(&b.write(&dir, "accessor", Container::Glb));
-    assert!(e.contains("mesh 0 primitive 0") && e.contains("POSITION accessor 0") && e.contains("do not fit"), "{e}");
+    assert!(
+        e.contains("mesh 0 primitive 0")
+            && e.contains("POSITION accessor 0")
+            && e.contains("do not fit"),
+        "{e}"
+    );
 
     // A wrong accessor type for NORMAL.
     let mut b = GltfBuilder::new();
-    let m = b.mesh(&QUAD, Some(&[[0.0, 0.0, 1.0]; 4]), Some(&QUAD_INDICES), None);
+    let m = b.mesh(
+        &QUAD,
+        Some(&[[0.0, 0.0, 1.0]; 4]),
+        Some(&QUAD_INDICES),
+        None,
+    );
     b.push("nodes", json!({ "mesh": m }));
     b.scene(&[0]);
     b.json["accessors"][1]["type"] = json!("VEC2");
-    b.json["accessors"][1].as_object_mut().unwrap().remove("min");
-    b.json["accessors"][1].as_object_mut().unwrap().remove("max");
+    b.json["accessors"][1]
+        .as_object_mut()
+        .unwrap()
+        .remove("min");
+    b.json["accessors"][1]
+        .as_object_mut()
+        .unwrap()
+        .remove("max");
     let e = load_err(&b.write(&dir, "type", Container::Glb));
-    assert!(e.contains("NORMAL accessor 1 has type VEC2, expected VEC3"), "{e}");
+    assert!(
+        e.contains("NORMAL accessor 1 has type VEC2, expected VEC3"),
+        "{e}"
+    );
 
     // An index out of range.
     let mut b = GltfBuilder::new();

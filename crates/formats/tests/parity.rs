@@ -40,11 +40,20 @@ fn write_gltf(dir: &Path, point_cd: f32) -> std::path::PathBuf {
     let (cp, ci) = cube();
     let cube = b.mesh(&cp, None, Some(&ci), Some(1));
     let flat = glam::Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2);
-    b.push("nodes", json!({ "mesh": floor, "rotation": flat.to_array(), "scale": [3.0, 3.0, 3.0] }));
+    b.push(
+        "nodes",
+        json!({ "mesh": floor, "rotation": flat.to_array(), "scale": [3.0, 3.0, 3.0] }),
+    );
     // The cube under a parent that lifts it, itself rotated 30° about y and scaled 0.5.
     let turn = glam::Quat::from_rotation_y(30f32.to_radians());
-    b.push("nodes", json!({ "translation": [0.0, 0.5, 0.0], "children": [2] }));
-    b.push("nodes", json!({ "mesh": cube, "rotation": turn.to_array(), "scale": [0.5, 0.5, 0.5] }));
+    b.push(
+        "nodes",
+        json!({ "translation": [0.0, 0.5, 0.0], "children": [2] }),
+    );
+    b.push(
+        "nodes",
+        json!({ "mesh": cube, "rotation": turn.to_array(), "scale": [0.5, 0.5, 0.5] }),
+    );
     b.push(
         "cameras",
         json!({ "type": "perspective", "perspective": { "yfov": YFOV, "znear": 0.01, "zfar": 100.0 } }),
@@ -59,7 +68,10 @@ fn write_gltf(dir: &Path, point_cd: f32) -> std::path::PathBuf {
     b.push("nodes", json!({ "translation": [1.0, 3.0, 2.0], "extensions": { "KHR_lights_punctual": { "light": 0 } } }));
     // The sun shines along (−1, −2, −1)/√6: its node's −z is that direction.
     let sun = looking_at(Vec3::ZERO, Vec3::new(-1.0, -2.0, -1.0), Vec3::Y);
-    b.push("nodes", json!({ "matrix": sun, "extensions": { "KHR_lights_punctual": { "light": 1 } } }));
+    b.push(
+        "nodes",
+        json!({ "matrix": sun, "extensions": { "KHR_lights_punctual": { "light": 1 } } }),
+    );
     b.scene(&[0, 1, 3, 4, 5]);
     b.write(dir, "parity", Container::Glb)
 }
@@ -149,14 +161,23 @@ fn gltf_and_equivalent_xml_render_the_same() {
     let gltf = render_file(&write_gltf(&dir, 20.0));
     assert!(xml.iter().all(|p| p.is_finite()) && gltf.iter().all(|p| p.is_finite()));
     let lit = xml.iter().filter(|p| p.max_element() > 0.0).count();
-    assert!(lit > (W * H / 2) as usize, "the scene is mostly dark: {lit} lit pixels");
+    assert!(
+        lit > (W * H / 2) as usize,
+        "the scene is mostly dark: {lit} lit pixels"
+    );
     let (block, mean) = differences(&xml, &gltf);
     println!("glTF vs XML: worst 8x8 block {block:.4}, image mean {mean:.5}");
-    assert!(block < 0.03 && mean < 0.005, "worst block {block}, mean {mean}");
+    assert!(
+        block < 0.03 && mean < 0.005,
+        "worst block {block}, mean {mean}"
+    );
 
     // The comparison sees a 10 % brighter point light.
     let brighter = render_file(&write_gltf(&dir, 22.0));
     let (block, mean) = differences(&xml, &brighter);
     println!("glTF with a 10% brighter point light vs XML: worst block {block:.4}, mean {mean:.5}");
-    assert!(block > 0.03 || mean > 0.005, "a 10% brighter light went unnoticed");
+    assert!(
+        block > 0.03 || mean > 0.005,
+        "a 10% brighter light went unnoticed"
+    );
 }

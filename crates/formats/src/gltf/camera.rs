@@ -37,7 +37,10 @@ pub(crate) fn build_camera(
     warn: &mut dyn FnMut(String),
 ) -> Result<(CameraDesc, FilmDesc), String> {
     let is_perspective = |c: &CameraInstance<'_>| {
-        matches!(c.camera.projection(), gltf::camera::Projection::Perspective(_))
+        matches!(
+            c.camera.projection(),
+            gltf::camera::Projection::Perspective(_)
+        )
     };
     let chosen = match options.camera {
         Some(i) => {
@@ -45,7 +48,11 @@ pub(crate) fn build_camera(
             if i >= count {
                 return Err(format!(
                     "there is no camera {i}: the file has {count} camera(s){}",
-                    if count > 0 { format!(", 0 to {}", count - 1) } else { String::new() }
+                    if count > 0 {
+                        format!(", 0 to {}", count - 1)
+                    } else {
+                        String::new()
+                    }
                 ));
             }
             let inst = instances
@@ -62,7 +69,11 @@ pub(crate) fn build_camera(
         }
         None => {
             let first = instances.cameras.iter().find(|c| is_perspective(c));
-            let skipped = instances.cameras.iter().filter(|c| !is_perspective(c)).count();
+            let skipped = instances
+                .cameras
+                .iter()
+                .filter(|c| !is_perspective(c))
+                .count();
             if skipped > 0 {
                 warn(format!(
                     "{skipped} orthographic camera(s) skipped: radia renders perspective cameras only"
@@ -127,8 +138,7 @@ fn from_gltf(
 /// The horizontal field of view (degrees) for a vertical one on `film`.
 fn horizontal_fov(yfov_degrees: f32, film: &FilmDesc) -> f32 {
     let aspect = film.width as f64 / film.height as f64;
-    (2.0 * (((yfov_degrees as f64).to_radians() * 0.5).tan() * aspect).atan())
-        .to_degrees() as f32
+    (2.0 * (((yfov_degrees as f64).to_radians() * 0.5).tan() * aspect).atan()).to_degrees() as f32
 }
 
 /// The camera framing the bounding sphere of `shapes` (see the module documentation).

@@ -126,9 +126,9 @@ fn check_position_references(doc: &gltf::Document) -> Result<(), String> {
     let json = doc.as_json();
     for (i, mesh) in json.meshes.iter().enumerate() {
         for (j, prim) in mesh.primitives.iter().enumerate() {
-            let position = prim
-                .attributes
-                .get(&gltf::json::validation::Checked::Valid(gltf::Semantic::Positions));
+            let position = prim.attributes.get(&gltf::json::validation::Checked::Valid(
+                gltf::Semantic::Positions,
+            ));
             if let Some(a) = position {
                 if a.value() >= json.accessors.len() {
                     return Err(format!(
@@ -154,7 +154,10 @@ pub(crate) fn unsupported_used(doc: &gltf::Document) -> Vec<String> {
 /// A URI as it can be quoted in a message (data URIs are long).
 fn shorten(uri: &str) -> String {
     if uri.len() > 60 {
-        format!("{}...", &uri[..uri.char_indices().nth(40).map_or(uri.len(), |c| c.0)])
+        format!(
+            "{}...",
+            &uri[..uri.char_indices().nth(40).map_or(uri.len(), |c| c.0)]
+        )
     } else {
         uri.to_string()
     }
@@ -175,7 +178,11 @@ fn read_uri(dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
     }
     if let Some((scheme, _)) = uri.split_once(':') {
         // A Windows drive letter is not a scheme; anything else (http:, file:) is.
-        if scheme.len() > 1 && scheme.chars().all(|c| c.is_ascii_alphanumeric() || "+-.".contains(c)) {
+        if scheme.len() > 1
+            && scheme
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "+-.".contains(c))
+        {
             return Err(format!("the URI scheme \"{scheme}:\" is not supported (only relative paths and data: URIs)"));
         }
     }
@@ -297,9 +304,23 @@ pub(crate) fn check_accessor(
             gltf::accessor::sparse::IndexType::U16 => 2,
             gltf::accessor::sparse::IndexType::U32 => 4,
         };
-        check_range(file, &format!("{name} sparse indices"), &idx.view(), idx.offset(), n, size)?;
+        check_range(
+            file,
+            &format!("{name} sparse indices"),
+            &idx.view(),
+            idx.offset(),
+            n,
+            size,
+        )?;
         let values = sparse.values();
-        check_range(file, &format!("{name} sparse values"), &values.view(), values.offset(), n, elem)?;
+        check_range(
+            file,
+            &format!("{name} sparse values"),
+            &values.view(),
+            values.offset(),
+            n,
+            elem,
+        )?;
     }
     Ok(())
 }

@@ -41,7 +41,10 @@ use radia_scene::EmitterDesc;
 
 /// The emitter of one light instance; `None` (with a warning) for a light that cannot
 /// emit (zero intensity, or a direction that the transform destroys).
-pub(crate) fn build_light(l: &LightInstance<'_>, warn: &mut dyn FnMut(String)) -> Option<EmitterDesc> {
+pub(crate) fn build_light(
+    l: &LightInstance<'_>,
+    warn: &mut dyn FnMut(String),
+) -> Option<EmitterDesc> {
     use gltf::khr_lights_punctual::Kind;
     let name = match l.light.name() {
         Some(n) => format!("light {} (\"{n}\") on node {}", l.light.index(), l.node),
@@ -49,7 +52,9 @@ pub(crate) fn build_light(l: &LightInstance<'_>, warn: &mut dyn FnMut(String)) -
     };
     let value = (Spectrum::from_array(l.light.color()) * l.light.intensity()).max(Spectrum::ZERO);
     if !(value.max_element() > 0.0 && value.is_finite()) {
-        warn(format!("{name} has no (finite, positive) intensity: skipped"));
+        warn(format!(
+            "{name} has no (finite, positive) intensity: skipped"
+        ));
         return None;
     }
     if l.light.range().is_some() && !matches!(l.light.kind(), Kind::Directional) {
@@ -58,10 +63,16 @@ pub(crate) fn build_light(l: &LightInstance<'_>, warn: &mut dyn FnMut(String)) -
         ));
     }
     let position = l.to_world.transform_point3(DVec3::ZERO).as_vec3();
-    let axis = l.to_world.transform_vector3(DVec3::NEG_Z).normalize().as_vec3();
+    let axis = l
+        .to_world
+        .transform_vector3(DVec3::NEG_Z)
+        .normalize()
+        .as_vec3();
     let needs_axis = !matches!(l.light.kind(), Kind::Point);
     if needs_axis && !axis.is_finite() {
-        warn(format!("{name}: its node's transform has no direction (zero scale): skipped"));
+        warn(format!(
+            "{name}: its node's transform has no direction (zero scale): skipped"
+        ));
         return None;
     }
     Some(match l.light.kind() {

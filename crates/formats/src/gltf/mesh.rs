@@ -2,9 +2,9 @@
 
 use super::data::{check_accessor, AccessorSpec, GltfFile};
 use super::nodes::MeshInstance;
+use glam::{DMat3, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
-use glam::{DMat3, Vec2, Vec3};
 use radia_scene::Mesh;
 
 /// What the primitives had that radia skips, reported once per file.
@@ -48,7 +48,10 @@ pub(crate) fn build_primitive(
     let at = format!("mesh {} primitive {}", inst.mesh.index(), prim.index());
     let fail = |e: String| format!("{at}: {e}");
     let mode = prim.mode();
-    if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+    if !matches!(
+        mode,
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+    ) {
         warnings.non_triangles += 1;
         return Ok(None);
     }
@@ -261,10 +264,7 @@ mod tests {
             assemble(Mode::TriangleFan, &[0, 1, 2, 3]),
             vec![[1, 2, 0], [2, 3, 0]]
         );
-        assert_eq!(
-            assemble(Mode::Triangles, &[0, 1, 2, 3, 4]),
-            vec![[0, 1, 2]]
-        );
+        assert_eq!(assemble(Mode::Triangles, &[0, 1, 2, 3, 4]), vec![[0, 1, 2]]);
         assert!(assemble(Mode::TriangleStrip, &[0, 1]).is_empty());
     }
 }

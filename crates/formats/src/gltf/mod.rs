@@ -62,7 +62,8 @@ use radia_scene::{
 use std::path::Path;
 
 /// The extensions radia reads.
-pub const SUPPORTED_EXTENSIONS: &[&str] = &["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+pub const SUPPORTED_EXTENSIONS: &[&str] =
+    &["KHR_lights_punctual", "KHR_materials_emissive_strength"];
 
 /// What the caller (the command line) may choose for a glTF file.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -116,8 +117,8 @@ pub fn load_gltf_with_warnings(
     let mut mesh_warnings = mesh::Warnings::default();
     for inst in &instances.meshes {
         for prim in inst.mesh.primitives() {
-            let Some(shape) = mesh::build_primitive(&file, inst, &prim, &mut mesh_warnings)
-                .map_err(err)?
+            let Some(shape) =
+                mesh::build_primitive(&file, inst, &prim, &mut mesh_warnings).map_err(err)?
             else {
                 continue;
             };

@@ -61,8 +61,11 @@ pub(crate) fn flatten<'a>(
     let mut visited = vec![false; doc.nodes().len()];
     let mut ignored = Ignored::default();
     // Depth first with an explicit stack (a deep hierarchy must not overflow the stack).
-    let mut stack: Vec<(gltf::Node<'a>, DMat4)> =
-        roots.into_iter().rev().map(|n| (n, DMat4::IDENTITY)).collect();
+    let mut stack: Vec<(gltf::Node<'a>, DMat4)> = roots
+        .into_iter()
+        .rev()
+        .map(|n| (n, DMat4::IDENTITY))
+        .collect();
     while let Some((node, parent)) = stack.pop() {
         let i = node.index();
         if visited[i] {

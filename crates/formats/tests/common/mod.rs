@@ -22,7 +22,8 @@ pub enum Container {
     Glb,
 }
 
-pub const ALL_CONTAINERS: [Container; 3] = [Container::External, Container::DataUri, Container::Glb];
+pub const ALL_CONTAINERS: [Container; 3] =
+    [Container::External, Container::DataUri, Container::Glb];
 
 /// A fresh directory for one test's files (under the target's temporary folder, kept after
 /// the run so that they can be validated with the Khronos validator).
@@ -154,7 +155,8 @@ impl GltfBuilder {
         match container {
             Container::External => {
                 std::fs::write(dir.join(format!("{name}.bin")), &self.bin).unwrap();
-                json["buffers"] = json!([{ "uri": format!("{name}.bin"), "byteLength": self.bin.len() }]);
+                json["buffers"] =
+                    json!([{ "uri": format!("{name}.bin"), "byteLength": self.bin.len() }]);
                 let path = dir.join(format!("{name}.gltf"));
                 std::fs::write(&path, serde_json::to_vec_pretty(&json).unwrap()).unwrap();
                 path
@@ -214,7 +216,14 @@ pub const QUAD_INDICES: [u16; 6] = [0, 1, 2, 0, 2, 3];
 pub fn cube() -> (Vec<[f32; 3]>, Vec<u16>) {
     let (x, y, z) = (glam::Vec3::X, glam::Vec3::Y, glam::Vec3::Z);
     // (n, u, v) with u × v = n.
-    let faces = [(x, y, z), (-x, z, y), (y, z, x), (-y, x, z), (z, x, y), (-z, y, x)];
+    let faces = [
+        (x, y, z),
+        (-x, z, y),
+        (y, z, x),
+        (-y, x, z),
+        (z, x, y),
+        (-z, y, x),
+    ];
     let mut p = Vec::new();
     let mut ix = Vec::new();
     for (n, u, v) in faces {
@@ -226,7 +235,6 @@ pub fn cube() -> (Vec<[f32; 3]>, Vec<u16>) {
     }
     (p, ix)
 }
-
 
 /// The node matrix (column-major) of a glTF camera or light at `eye` looking at `target`:
 /// local −z towards the target, +y as close to `up` as it can be, +x to the right.

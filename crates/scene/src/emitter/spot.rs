@@ -195,7 +195,9 @@ mod tests {
     fn smooth_profile_is_the_extensions_formula() {
         let l = gltf_spot(20.0, 40.0);
         let (ci, co) = (20f32.to_radians().cos(), 40f32.to_radians().cos());
-        for deg in [0.0f32, 10.0, 19.9, 20.1, 25.0, 30.0, 35.0, 39.9, 40.1, 60.0, 120.0] {
+        for deg in [
+            0.0f32, 10.0, 19.9, 20.1, 25.0, 30.0, 35.0, 39.9, 40.1, 60.0, 120.0,
+        ] {
             let c = deg.to_radians().cos();
             let t = ((c - co) / (ci - co)).clamp(0.0, 1.0);
             let f = l.falloff(dir(deg) * 3.0);
@@ -223,7 +225,10 @@ mod tests {
                 * 2.0
                 * std::f64::consts::PI;
             let p = l.power() as f64;
-            assert!((p - integral).abs() < 1e-3 * integral, "{inner}/{outer}: {p} vs {integral}");
+            assert!(
+                (p - integral).abs() < 1e-3 * integral,
+                "{inner}/{outer}: {p} vs {integral}"
+            );
             // Nothing beyond the cone the light BVH is told about; full intensity inside it.
             let (beam, spread) = l.cone_angles();
             let edge = (beam + spread).to_degrees();
