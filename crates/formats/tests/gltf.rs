@@ -409,7 +409,10 @@ fn emission_strength_and_alpha_modes() {
         Some("KHR_materials_emissive_strength"),
     );
     let (d, warnings) = load(&b.write(&dir, "emissive", Container::Glb));
-    assert_eq!(d.shapes[0].emission, Some(Vec3::new(4.0, 2.0, 1.0)));
+    assert_eq!(
+        d.shapes[0].emission,
+        Some(radia_bsdf::Texture::from(Vec3::new(4.0, 2.0, 1.0)))
+    );
     assert!(warnings.is_empty(), "{warnings:?}");
     // Emissive surfaces light the scene: no default environment.
     assert!(d.emitters.is_empty());

@@ -129,7 +129,7 @@ pub fn load_gltf_with_warnings(
             shapes.push(radia_scene::ShapeDesc {
                 geometry: radia_scene::Geometry::Mesh(shape),
                 bsdf: mat.bsdf.clone(),
-                emission: mat.emission,
+                emission: mat.emission.map(radia_bsdf::Texture::from),
                 origin: format!(
                     "{}: mesh {} primitive {}",
                     path.display(),
