@@ -152,7 +152,7 @@ pub(crate) fn unsupported_used(doc: &gltf::Document) -> Vec<String> {
 }
 
 /// A URI as it can be quoted in a message (data URIs are long).
-fn shorten(uri: &str) -> String {
+pub(crate) fn shorten(uri: &str) -> String {
     if uri.len() > 60 {
         format!(
             "{}...",
@@ -164,7 +164,7 @@ fn shorten(uri: &str) -> String {
 }
 
 /// The bytes a buffer URI names: a base64 `data:` URI, or a file relative to `dir`.
-fn read_uri(dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
+pub(crate) fn read_uri(dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let (header, payload) = rest
             .split_once(',')

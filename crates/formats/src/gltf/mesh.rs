@@ -14,8 +14,6 @@ pub(crate) struct Warnings {
     non_triangles: usize,
     /// Zero-area triangles dropped.
     degenerate: usize,
-    /// Primitives with more than one texture coordinate set (only TEXCOORD_0 is read).
-    extra_texcoords: bool,
 }
 
 impl Warnings {
@@ -29,20 +27,19 @@ impl Warnings {
         if self.degenerate > 0 {
             warn(format!("{} zero-area triangle(s) dropped", self.degenerate));
         }
-        if self.extra_texcoords {
-            warn("only TEXCOORD_0 is read (no material uses another set yet)".into());
-        }
     }
 }
 
 const FLOAT: &[(DataType, bool)] = &[(DataType::F32, false)];
 
-/// The world-space mesh of one primitive of `inst`, or `None` for a primitive radia skips
-/// (points, lines, no triangle left).
+/// The world-space mesh of one primitive of `inst`, with the uv set `TEXCOORD_<tex_coord>`
+/// (if the primitive has it), or `None` for a primitive radia skips (points, lines, no
+/// triangle left).
 pub(crate) fn build_primitive(
     file: &GltfFile,
     inst: &MeshInstance<'_>,
     prim: &gltf::Primitive<'_>,
+    tex_coord: u32,
     warnings: &mut Warnings,
 ) -> Result<Option<Mesh>, String> {
     let at = format!("mesh {} primitive {}", inst.mesh.index(), prim.index());
@@ -100,13 +97,14 @@ pub(crate) fn build_primitive(
         None => None,
     };
 
-    let uvs = match prim.get(&gltf::Semantic::TexCoords(0)) {
+    let uv_name = format!("TEXCOORD_{tex_coord}");
+    let uvs = match prim.get(&gltf::Semantic::TexCoords(tex_coord)) {
         Some(acc) => {
             check_accessor(
                 file,
                 &acc,
                 &AccessorSpec {
-                    what: "TEXCOORD_0",
+                    what: &uv_name,
                     dimensions: &[Dimensions::Vec2],
                     types: &[
                         (DataType::F32, false),
@@ -117,17 +115,16 @@ pub(crate) fn build_primitive(
             )
             .map_err(fail)?;
             let v: Vec<Vec2> = reader
-                .read_tex_coords(0)
-                .ok_or_else(|| fail("cannot read TEXCOORD_0".into()))?
+                .read_tex_coords(tex_coord)
+                .ok_or_else(|| fail(format!("cannot read {uv_name}")))?
                 .into_f32()
                 .map(Vec2::from_array)
                 .collect();
-            same_count(&v, n, "TEXCOORD_0").map_err(fail)?;
+            same_count(&v, n, &uv_name).map_err(fail)?;
             Some(v)
         }
         None => None,
     };
-    warnings.extra_texcoords |= prim.get(&gltf::Semantic::TexCoords(1)).is_some();
 
     // The vertex sequence: the indices, or 0..n.
     let sequence: Vec<u32> = match prim.indices() {

@@ -20,12 +20,15 @@
 //!   animations are ignored with a warning (the rest pose is rendered).
 //! - **Meshes** (`mesh.rs`): triangle primitives (`TRIANGLES`, and `TRIANGLE_STRIP`/`FAN`
 //!   unrolled as the specification's §3.7.2.1 defines), indexed or not; positions,
-//!   normals (transformed by the inverse transpose), `TEXCOORD_0`. Without normals the
+//!   normals (transformed by the inverse transpose), the uv set the material's textures
+//!   name (`texCoord`, default `TEXCOORD_0`). Without normals the
 //!   primitive is flat-shaded, as the specification requires. A node whose world
 //!   transform has a negative determinant has its winding reversed (§3.7.2.1), so front
 //!   faces stay counter-clockwise. Point and line primitives have no area: they are
-//!   skipped with a warning. Zero-area triangles are dropped (with a warning). Tangents
-//!   are only needed by normal maps, which radia does not read yet.
+//!   skipped with a warning. Zero-area triangles are dropped (with a warning).
+//! - **Textures** (`textures.rs`): base colour, metallic-roughness, normal and emissive
+//!   textures from embedded, data-URI or external PNG/JPEG images, with the samplers'
+//!   wrap modes and magnification filter.
 //! - **Materials** (`material.rs`): the metallic-roughness model onto radia's
 //!   `cooktorrance` (see there for the mapping, `doubleSided`, alpha modes, emission).
 //! - **Lights** (`lights.rs`): `KHR_lights_punctual` in glTF's photometric units, see
@@ -53,6 +56,7 @@ pub mod lights;
 pub mod material;
 mod mesh;
 mod nodes;
+mod textures;
 
 use data::GltfFile;
 use radia_math::Spectrum;
@@ -113,23 +117,29 @@ pub fn load_gltf_with_warnings(
     let instances = nodes::flatten(&file.doc, &mut warn).map_err(err)?;
 
     let mut shapes = Vec::new();
-    let mut materials = material::Materials::new(&file.doc);
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut images = textures::Images::new(&file, &dir);
+    let mut materials = material::Materials::new();
     let mut mesh_warnings = mesh::Warnings::default();
     for inst in &instances.meshes {
         for prim in inst.mesh.primitives() {
-            let Some(shape) =
-                mesh::build_primitive(&file, inst, &prim, &mut mesh_warnings).map_err(err)?
-            else {
-                continue;
-            };
-            let mat = materials.get(prim.material(), &mut warn);
+            let mat = materials
+                .get(prim.material(), &mut images, &mut warn)
+                .map_err(err)?;
             if mat.cut_out {
                 continue;
             }
+            let tex_coord = mat.tex_coord.unwrap_or(0);
+            let Some(shape) =
+                mesh::build_primitive(&file, inst, &prim, tex_coord, &mut mesh_warnings)
+                    .map_err(err)?
+            else {
+                continue;
+            };
             shapes.push(radia_scene::ShapeDesc {
                 geometry: radia_scene::Geometry::Mesh(shape),
                 bsdf: mat.bsdf.clone(),
-                emission: mat.emission.map(radia_bsdf::Texture::from),
+                emission: mat.emission.clone(),
                 origin: format!(
                     "{}: mesh {} primitive {}",
                     path.display(),
@@ -140,7 +150,6 @@ pub fn load_gltf_with_warnings(
         }
     }
     mesh_warnings.report(&mut warn);
-    materials.report(&mut warn);
 
     let mut emitters: Vec<EmitterDesc> = instances
         .lights
