@@ -250,3 +250,137 @@ pub fn looking_at(eye: glam::Vec3, target: glam::Vec3, up: glam::Vec3) -> [f32; 
     )
     .to_cols_array()
 }
+
+impl GltfBuilder {
+    /// An image embedded in the buffer (a buffer view without target) with its MIME type;
+    /// returns the image index.
+    pub fn image(&mut self, bytes: &[u8], mime_type: &str) -> usize {
+        let view = self.view(bytes, None);
+        self.push(
+            "images",
+            json!({ "bufferView": view, "mimeType": mime_type }),
+        )
+    }
+
+    /// A texture of `image` with a new sampler (`magFilter`, `wrapS`, `wrapT` as glTF's GL
+    /// enums); returns the texture index.
+    pub fn texture(&mut self, image: usize, mag_filter: u32, wrap_s: u32, wrap_t: u32) -> usize {
+        let sampler = self.push(
+            "samplers",
+            json!({ "magFilter": mag_filter, "wrapS": wrap_s, "wrapT": wrap_t }),
+        );
+        self.push("textures", json!({ "source": image, "sampler": sampler }))
+    }
+
+    /// A mesh of one indexed triangle primitive with normals and TEXCOORD_0.
+    pub fn mesh_with_uv(
+        &mut self,
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        uvs: &[[f32; 2]],
+        indices: &[u16],
+        material: usize,
+    ) -> usize {
+        let p = self.floats(&positions.concat(), "VEC3");
+        let n = self.floats(&normals.concat(), "VEC3");
+        let t = self.floats(&uvs.concat(), "VEC2");
+        let i = self.indices(indices);
+        self.push(
+            "meshes",
+            json!({ "primitives": [{ "attributes": { "POSITION": p, "NORMAL": n, "TEXCOORD_0": t },
+                                      "indices": i, "material": material }] }),
+        )
+    }
+}
+
+/// glTF sampler enums (§5.26).
+pub const NEAREST: u32 = 9728;
+pub const LINEAR: u32 = 9729;
+pub const REPEAT: u32 = 10497;
+pub const MIRRORED_REPEAT: u32 = 33648;
+pub const CLAMP_TO_EDGE: u32 = 33071;
+
+/// An 8-bit PNG (RGB, or RGBA with `channels` 4) of `width × height` texels, row 0 at the top.
+pub fn png(width: u32, height: u32, channels: u8, data: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    let color = if channels == 4 {
+        image::ExtendedColorType::Rgba8
+    } else if channels == 1 {
+        image::ExtendedColorType::L8
+    } else {
+        image::ExtendedColorType::Rgb8
+    };
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut out),
+        data,
+        width,
+        height,
+        color,
+    )
+    .unwrap();
+    out
+}
+
+/// A UV sphere of radius 1 with `rings` × `segments` quads: positions, normals, uv and
+/// counter-clockwise (outward) triangles.
+#[allow(clippy::type_complexity)]
+pub fn uv_sphere(
+    rings: u16,
+    segments: u16,
+) -> (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<[f32; 2]>, Vec<u16>) {
+    let (mut p, mut uv, mut ix) = (Vec::new(), Vec::new(), Vec::new());
+    for r in 0..=rings {
+        let theta = std::f32::consts::PI * r as f32 / rings as f32;
+        for s in 0..=segments {
+            let phi = 2.0 * std::f32::consts::PI * s as f32 / segments as f32;
+            p.push([
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                -theta.sin() * phi.sin(),
+            ]);
+            uv.push([s as f32 / segments as f32, r as f32 / rings as f32]);
+        }
+    }
+    let row = segments + 1;
+    for r in 0..rings {
+        for s in 0..segments {
+            let (a, b) = (r * row + s, (r + 1) * row + s);
+            if r > 0 {
+                ix.extend([a, b, a + 1]);
+            }
+            if r + 1 < rings {
+                ix.extend([a + 1, b, b + 1]);
+            }
+        }
+    }
+    let n = p.clone();
+    (p, n, uv, ix)
+}
+
+/// A Wavefront OBJ of a mesh (positions, normals, uv as given: read it with
+/// `flip_tex_coords` false to keep glTF's uv).
+pub fn obj(
+    positions: &[[f32; 3]],
+    normals: &[[f32; 3]],
+    uvs: &[[f32; 2]],
+    indices: &[u16],
+) -> String {
+    let mut s = String::new();
+    for v in positions {
+        s += &format!("v {} {} {}\n", v[0], v[1], v[2]);
+    }
+    for v in uvs {
+        s += &format!("vt {} {}\n", v[0], v[1]);
+    }
+    for v in normals {
+        s += &format!("vn {} {} {}\n", v[0], v[1], v[2]);
+    }
+    for t in indices.chunks(3) {
+        s += "f";
+        for i in t {
+            s += &format!(" {0}/{0}/{0}", i + 1);
+        }
+        s += "\n";
+    }
+    s
+}
