@@ -376,21 +376,25 @@ mod tests {
     /// Schlick's F on V·H, fresnel_mix for the dielectric and conductor_fresnel for the
     /// metal, mixed by metallic; times cos θo (eval includes the cosine).
     fn appendix_b(base: [f32; 3], metallic: f32, roughness: f32, v: Vec3, l: Vec3) -> [f32; 3] {
+        // In f64: near the peak of a smooth lobe, (N·H)²(α² − 1) + 1 cancels in f32.
+        let (v, l) = (v.as_dvec3(), l.as_dvec3());
+        let (metallic, roughness) = (metallic as f64, roughness as f64);
         let a = roughness * roughness;
         let a2 = a * a;
         let h = (v + l).normalize();
         let (nl, nv, nh, vh) = (l.z, v.z, h.z, v.dot(h));
-        let d = a2 / (std::f32::consts::PI * ((nh * nh) * (a2 - 1.0) + 1.0).powi(2));
+        let d = a2 / (std::f64::consts::PI * ((nh * nh) * (a2 - 1.0) + 1.0).powi(2));
         let vis = 1.0
             / ((nl + (a2 + (1.0 - a2) * nl * nl).sqrt())
                 * (nv + (a2 + (1.0 - a2) * nv * nv).sqrt()));
         let specular = vis * d;
-        let schlick = |f0: f32| f0 + (1.0 - f0) * (1.0 - vh.abs()).powi(5);
+        let schlick = |f0: f64| f0 + (1.0 - f0) * (1.0 - vh.abs()).powi(5);
         base.map(|c| {
-            let diffuse = c / std::f32::consts::PI;
+            let c = c as f64;
+            let diffuse = c / std::f64::consts::PI;
             let dielectric = diffuse * (1.0 - schlick(0.04)) + specular * schlick(0.04);
             let metal = specular * schlick(c);
-            ((1.0 - metallic) * dielectric + metallic * metal) * nl
+            (((1.0 - metallic) * dielectric + metallic * metal) * nl) as f32
         })
     }
 
