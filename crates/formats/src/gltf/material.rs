@@ -106,12 +106,11 @@ impl Materials {
         images: &mut Images<'_>,
         warn: &mut dyn FnMut(String),
     ) -> Result<&MaterialDesc, String> {
-        let key = m.index();
-        if !self.built.contains_key(&key) {
-            let desc = build(&m, images, warn)?;
-            self.built.insert(key, desc);
-        }
-        Ok(&self.built[&key])
+        use std::collections::hash_map::Entry;
+        Ok(match self.built.entry(m.index()) {
+            Entry::Occupied(e) => e.into_mut(),
+            Entry::Vacant(e) => e.insert(build(&m, images, warn)?),
+        })
     }
 }
 

@@ -38,7 +38,8 @@ pub(crate) fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<EmitterDesc, 
             let pos = p.pos_of("outer_cone_angle");
             let outer = p.float("outer_cone_angle", 45.0)?;
             let inner = p.float("inner_cone_angle", 0.0)?;
-            if !(inner >= 0.0 && inner < outer && outer <= 90.0) {
+            let valid = inner >= 0.0 && inner < outer && outer <= 90.0;
+            if !valid {
                 return Err(p.err_at(
                     pos,
                     format!("spot: need 0 <= inner_cone_angle < outer_cone_angle <= 90 (got {inner} and {outer})"),
