@@ -142,10 +142,81 @@ CASES = [
     ("lookat-degenerate.xml", "lookat-degenerate.xml:", scene(SPHERE, sensor_with(extra='        <transform name="to_world"><lookat origin="0, 0, 1" target="0, 0, 1" up="0, 1, 0"/></transform>\n'))),
     ("spot-cutoff-negative.xml", "spot-cutoff-negative.xml:9:9", scene('    <emitter type="spot">\n        <float name="cutoff_angle" value="-10"/>\n    </emitter>\n' + SPHERE)),
     ("envmap-scale-nan.xml", "envmap-scale-nan.xml:", scene('    <emitter type="envmap">\n        <string name="filename" value="../../scenes/textures/sky-sun.exr"/>\n        <float name="scale" value="nan"/>\n    </emitter>\n')),
-    # ---- glTF (read as XML today; the glTF reader must refuse them too) ----
+    # ---- glTF (written by gltf_files()) ----
     ("gltf-truncated.gltf", "gltf-truncated.gltf", '{"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0'),
     ("glb-bad-magic.glb", "glb-bad-magic.glb", None),  # written by data_files()
+    ("gltf-missing-buffer.gltf", "gltf-missing-buffer.gltf: buffer 0 (uri \"no-such-file.bin\")",
+     None),
+    ("gltf-short-buffer.gltf", "gltf-short-buffer.gltf: buffer 0 has 24 bytes, fewer than its byteLength 36", None),
+    ("gltf-bad-accessor.gltf", "gltf-bad-accessor.gltf: mesh 0 primitive 0: POSITION accessor 0 has type VEC2", None),
+    ("gltf-accessor-past-view.gltf", "gltf-accessor-past-view.gltf: mesh 0 primitive 0: POSITION accessor 0", None),
+    ("gltf-index-out-of-range.gltf", "gltf-index-out-of-range.gltf: mesh 0 primitive 0: index 7", None),
+    ("gltf-required-extension.gltf", "gltf-required-extension.gltf: the file requires the extension KHR_draco_mesh_compression", None),
+    ("gltf-bad-image.gltf", "gltf-bad-image.gltf: material 0: texture 0: image 0", None),
+    ("glb-truncated.glb", "glb-truncated.glb: not a valid GLB file", None),
 ]
+
+
+def gltf_triangle(**change):
+    """A valid one-triangle glTF (positions in a data-URI buffer) as a dict, with changes."""
+    import base64
+    import json
+    data = struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0)
+    doc = {
+        "asset": {"version": "2.0"},
+        "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0, 0, 0], "max": [1, 1, 0]}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "buffers": [{"byteLength": 36,
+                     "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}],
+    }
+    for path, value in change.items():
+        *parents, last = path.split("__")
+        node = doc
+        for k in parents:
+            node = node[int(k)] if isinstance(node, list) else node[k]
+        if isinstance(node, list):
+            node[int(last)] = value
+        else:
+            node[last] = value
+    return json.dumps(doc, indent=1) + "\n"
+
+
+def gltf_files(write):
+    """The malformed glTF files: each one fault in an otherwise valid file."""
+    import base64
+    import json
+    write("gltf-missing-buffer.gltf", gltf_triangle(buffers__0={"byteLength": 36, "uri": "no-such-file.bin"}))
+    short = base64.b64encode(bytes(24)).decode()
+    write("gltf-short-buffer.gltf", gltf_triangle(
+        buffers__0={"byteLength": 36, "uri": "data:application/octet-stream;base64," + short}))
+    write("gltf-bad-accessor.gltf", gltf_triangle(accessors__0__type="VEC2"))
+    write("gltf-accessor-past-view.gltf", gltf_triangle(accessors__0__count=30))
+    idx = struct.pack("<3H", 0, 1, 7) + b"\0\0"
+    data = struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0) + idx
+    b64 = base64.b64encode(data).decode()
+    write("gltf-index-out-of-range.gltf", gltf_triangle(
+        meshes__0={"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]},
+        accessors=[{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                    "min": [0, 0, 0], "max": [1, 1, 0]},
+                   {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}],
+        bufferViews=[{"buffer": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+        buffers__0={"byteLength": len(data), "uri": "data:application/octet-stream;base64," + b64}))
+    write("gltf-required-extension.gltf", gltf_triangle(
+        extensionsUsed=["KHR_draco_mesh_compression"], extensionsRequired=["KHR_draco_mesh_compression"]))
+    garbage_png = base64.b64encode(b"\x89PNG\r\n\x1a\n" + bytes(40)).decode()
+    write("gltf-bad-image.gltf", gltf_triangle(
+        meshes__0={"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]},
+        materials=[{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+        textures=[{"source": 0}],
+        images=[{"uri": "data:image/png;base64," + garbage_png}]))
+    # A GLB whose header promises more bytes than the file has.
+    good = json.dumps({"asset": {"version": "2.0"}}).encode()
+    good += b" " * (-len(good) % 4)
+    glb = b"glTF" + struct.pack("<II", 2, 12 + 8 + len(good) + 4000) + struct.pack("<I", len(good) + 4000) + b"JSON" + good
+    write("glb-truncated.glb", glb)
 
 
 def png_chunk(kind, data):
@@ -202,6 +273,7 @@ def data_files():
     garbage = bytes((i * 7919 + 13) % 256 for i in range(512))
     write("xml-binary-garbage.xml", garbage)
     write("glb-bad-magic.glb", b"glTX" + struct.pack("<II", 2, 64) + garbage[:52])
+    gltf_files(write)
 
     # PLY: a valid binary triangle, then faults.
     hdr = ("ply\nformat binary_little_endian 1.0\nelement vertex {n}\nproperty float x\n"

@@ -376,7 +376,7 @@ mod tests {
                 } else {
                     CookTorranceFresnel::MetallicRoughness {
                         base_color: random_color(rng).into(),
-                        metallic: rng.random(),
+                        metallic: rng.random::<f32>().into(),
                     }
                 },
             )),

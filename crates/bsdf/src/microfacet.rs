@@ -384,7 +384,8 @@ fn beckmann_slope_x(cos_theta_i: f32, u: f32) -> f32 {
     // Initial guess: the analytic solution for θ_i = π/2, the most nonlinear case.
     let mut x = maxval - (maxval + 1.0) * erf((-u.ln()).sqrt());
     // Normalization of the CDF.
-    let target = u * (1.0 + maxval + INV_SQRT_PI * tan_theta_i * (-cot_theta_i * cot_theta_i).exp());
+    let target =
+        u * (1.0 + maxval + INV_SQRT_PI * tan_theta_i * (-cot_theta_i * cot_theta_i).exp());
     for _ in 0..3 {
         let slope = erfinv(x);
         let value = 1.0 + x + INV_SQRT_PI * tan_theta_i * (-slope * slope).exp() - target;

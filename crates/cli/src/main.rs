@@ -1,7 +1,8 @@
-//! `radia`: renders Mitsuba 3 XML scenes.
+//! `radia`: renders Mitsuba 3 XML and glTF 2.0 scenes.
 //!
 //! ```text
 //! radia render scenes/cornell-box.xml -o cornell.exr --spp 256 --threads 2 --seed 0
+//! radia render model.glb -o model.png --spp 64 --camera 0
 //! ```
 
 use clap::{Parser, Subcommand};
@@ -11,7 +12,8 @@ use radia_render::{
     image_io::write_image, render_part_until, render_until, RenderOptions, SampleRange,
 };
 use radia_sampling::SamplerKind;
-use radia_scene::{load_mitsuba_xml, FilterDesc, LightSamplerKind, Scene};
+use radia_formats::{load_scene, GltfOptions, SceneFormat, SceneOptions};
+use radia_scene::{FilterDesc, LightSamplerKind, Scene};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
@@ -31,9 +33,10 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render a Mitsuba 3 XML scene to an EXR (linear float32 RGB) or PNG (sRGB 8-bit) image.
+    /// Render a Mitsuba 3 XML or glTF 2.0 (.gltf, .glb) scene to an EXR (linear float32 RGB)
+    /// or PNG (sRGB 8-bit) image.
     Render {
-        /// The scene file.
+        /// The scene file (.gltf and .glb are read as glTF, anything else as Mitsuba XML).
         scene: PathBuf,
         /// Output image (.exr or .png). Default: the scene's name with .exr, in the current folder.
         #[arg(short, long)]
@@ -76,6 +79,14 @@ enum Command {
         /// fingerprint in its header) for `radia merge`.
         #[arg(long, value_name = "A..B", value_parser = SampleRange::parse)]
         samples: Option<SampleRange>,
+        /// glTF: the camera to render from, an index into the file's cameras (default: the
+        /// first perspective camera of the scene, else one framing the scene).
+        #[arg(long, value_name = "N")]
+        camera: Option<usize>,
+        /// glTF: radiance of a constant environment (default: 1 when the file has no light
+        /// and no emissive material, else none; 0 for none).
+        #[arg(long, value_name = "RADIANCE")]
+        environment: Option<f32>,
     },
     /// Merge partial renders (`render --samples`) of one scene into its image: the same image,
     /// up to float rounding, as one render of all their samples. Refuses parts of different
@@ -216,6 +227,8 @@ fn run_render(command: Command) -> Result<ExitCode, String> {
         rfilter,
         time_budget,
         samples,
+        camera,
+        environment,
     } = command
     else {
         unreachable!("run_render is called with Command::Render")
@@ -246,8 +259,25 @@ fn run_render(command: Command) -> Result<ExitCode, String> {
     }
 
     let t_load = Instant::now();
-    let desc = load_mitsuba_xml(&scene_path, &defines).map_err(|e| e.to_string())?;
-    let mut desc = desc;
+    if SceneFormat::of_path(&scene_path) != SceneFormat::Gltf {
+        for (flag, given) in [
+            ("--camera", camera.is_some()),
+            ("--environment", environment.is_some()),
+        ] {
+            if given {
+                return Err(format!("{flag} applies to glTF scenes (.gltf, .glb) only"));
+            }
+        }
+    }
+    let options = SceneOptions {
+        defines,
+        gltf: GltfOptions {
+            camera,
+            resolution,
+            environment,
+        },
+    };
+    let mut desc = load_scene(&scene_path, &options).map_err(|e| e.to_string())?;
     if let Some((w, h)) = resolution {
         desc.film.width = w;
         desc.film.height = h;

@@ -211,3 +211,112 @@ fn bad_output_extension_is_an_error() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("x.jpg"));
 }
+
+/// A one-triangle glTF (its buffer a data URI) facing +z, seen by the default camera under
+/// the default environment.
+const TRIANGLE_GLTF: &str = r#"{
+  "asset": { "version": "2.0" },
+  "buffers": [{ "byteLength": 36, "uri": "data:application/octet-stream;base64,AACAvwAAgL8AAAAAAACAPwAAgL8AAAAAAAAAAAAAgD8AAAAA" }],
+  "bufferViews": [{ "buffer": 0, "byteLength": 36 }],
+  "accessors": [{ "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                  "min": [-1, -1, 0], "max": [1, 1, 0] }],
+  "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 } }] }],
+  "nodes": [{ "mesh": 0 }],
+  "scenes": [{ "nodes": [0] }],
+  "scene": 0
+}"#;
+
+#[test]
+fn renders_a_gltf_file_by_its_extension() {
+    let dir = temp_dir("gltf");
+    let path = dir.join("triangle.gltf");
+    std::fs::write(&path, TRIANGLE_GLTF).unwrap();
+    let out_path = dir.join("triangle.exr");
+    let out = radia(&[
+        "render",
+        path.to_str().unwrap(),
+        "-o",
+        out_path.to_str().unwrap(),
+        "--resolution",
+        "16x12",
+        "--spp",
+        "4",
+        "-q",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("16x12"), "{stderr}");
+    assert!(out_path.exists());
+
+    // --camera names a camera the file does not have: an error naming the file.
+    let out = radia(&[
+        "render",
+        path.to_str().unwrap(),
+        "-o",
+        out_path.to_str().unwrap(),
+        "--camera",
+        "2",
+        "-q",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && out.status.code() != Some(101),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("triangle.gltf") && stderr.contains("there is no camera 2"),
+        "{stderr}"
+    );
+    // glTF-only options on an XML scene are refused.
+    let xml = dir.join("scene.xml");
+    std::fs::write(&xml, GOOD_SCENE).unwrap();
+    let out = radia(&["render", xml.to_str().unwrap(), "--environment", "1", "-q"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--environment applies to glTF"));
+}
+
+#[test]
+fn malformed_gltf_is_an_error_not_a_panic() {
+    let dir = temp_dir("bad-gltf");
+    let out_path = dir.join("out.exr");
+    for (name, body, needle) in [
+        (
+            "truncated.glb",
+            &b"glTF\x02\x00\x00\x00\x40\x00\x00\x00\x10\x00"[..],
+            "GLB",
+        ),
+        (
+            "broken.gltf",
+            &b"<scene version=\"3.0.0\"/>"[..],
+            "not a valid glTF JSON file",
+        ),
+        (
+            "short.gltf",
+            TRIANGLE_GLTF
+                .replace(
+                    "\"byteLength\": 36, \"uri\"",
+                    "\"byteLength\": 360, \"uri\"",
+                )
+                .as_bytes(),
+            "fewer than its byteLength",
+        ),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, body).unwrap();
+        let out = radia(&[
+            "render",
+            path.to_str().unwrap(),
+            "-o",
+            out_path.to_str().unwrap(),
+            "-q",
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{name}: {stderr}");
+        assert_ne!(out.status.code(), Some(101), "{name}: panicked: {stderr}");
+        assert!(
+            stderr.contains(name) && stderr.contains(needle),
+            "{name}: {stderr}"
+        );
+        assert!(!out_path.exists());
+    }
+}

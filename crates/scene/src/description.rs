@@ -158,6 +158,15 @@ pub enum EmitterDesc {
         beam_width: f32,
         falloff_exponent: Option<f32>,
     },
+    /// glTF's spot (`KHR_lights_punctual`): from the origin of `to_world` along its +z,
+    /// `intensity` · clamp((cos θ − cos outer) / max(0.001, cos inner − cos outer), 0, 1)²;
+    /// angles in degrees.
+    SmoothSpot {
+        to_world: Affine3A,
+        intensity: Spectrum,
+        inner_cone_angle: f32,
+        outer_cone_angle: f32,
+    },
     /// `directional`: `irradiance` (W/m²) arriving along the unit `direction` of travel.
     Directional {
         direction: Vec3,

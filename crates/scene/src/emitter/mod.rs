@@ -109,6 +109,17 @@ impl Emitter {
                 *beam_width,
                 *falloff_exponent,
             )),
+            EmitterDesc::SmoothSpot {
+                to_world,
+                intensity,
+                inner_cone_angle,
+                outer_cone_angle,
+            } => Emitter::Spot(SpotLight::smooth(
+                *to_world,
+                *intensity,
+                *inner_cone_angle,
+                *outer_cone_angle,
+            )),
             EmitterDesc::Directional {
                 direction,
                 irradiance,

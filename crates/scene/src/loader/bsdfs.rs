@@ -331,7 +331,8 @@ fn rough_conductor(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadEr
 }
 
 /// radia's `cooktorrance`: GGX by default; `F0`, or glTF's `base_color` (default 0.5) and
-/// `metallic` (default 0, in [0, 1]); `alpha`, `alpha_u`/`alpha_v` or `roughness`.
+/// `metallic` (default 0, in [0, 1]; both may be textures); `alpha`, `alpha_u`/`alpha_v` or
+/// `roughness`.
 fn cook_torrance(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadError> {
     let kind = distribution_type(&mut p, MicrofacetType::Ggx)?;
     let visible = p.boolean("sample_visible", true)?;
@@ -348,16 +349,18 @@ fn cook_torrance(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadErro
     } else {
         let pos = p.pos_of("metallic");
         let base_color = texture_param(b, &mut p, "base_color", 0.5, true)?;
-        let metallic = p.float("metallic", 0.0)?;
-        if !(0.0..=1.0).contains(&metallic) {
-            return Err(p.err_at(
-                pos,
-                format!("cooktorrance: metallic {metallic} must be in [0, 1]"),
-            ));
+        let metallic = texture_param(b, &mut p, "metallic", 0.0, false)?;
+        if let Some(m) = metallic.as_constant() {
+            if !(0.0..=1.0).contains(&m.x) || m.x != m.y || m.y != m.z {
+                return Err(p.err_at(
+                    pos,
+                    format!("cooktorrance: metallic {} must be one value in [0, 1]", m.x),
+                ));
+            }
         }
         CookTorranceFresnel::MetallicRoughness {
             base_color,
-            metallic: metallic as f32,
+            metallic,
         }
     };
     p.finish()?;

@@ -31,6 +31,27 @@ pub(crate) fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<EmitterDesc, 
                 intensity: p.color("intensity", 1.0, false)?.as_vec3(),
             }
         }
+        "spot" if p.has("inner_cone_angle") || p.has("outer_cone_angle") => {
+            // radia's extension: glTF's smooth profile (KHR_lights_punctual), the cone
+            // angles in degrees as Mitsuba's are; the glTF reader's spot in XML.
+            let intensity = p.color("intensity", 1.0, false)?.as_vec3();
+            let pos = p.pos_of("outer_cone_angle");
+            let outer = p.float("outer_cone_angle", 45.0)?;
+            let inner = p.float("inner_cone_angle", 0.0)?;
+            let valid = inner >= 0.0 && inner < outer && outer <= 90.0;
+            if !valid {
+                return Err(p.err_at(
+                    pos,
+                    format!("spot: need 0 <= inner_cone_angle < outer_cone_angle <= 90 (got {inner} and {outer})"),
+                ));
+            }
+            EmitterDesc::SmoothSpot {
+                to_world: affine(&p.transform("to_world")?),
+                intensity,
+                inner_cone_angle: inner as f32,
+                outer_cone_angle: outer as f32,
+            }
+        }
         "spot" => {
             let intensity = p.color("intensity", 1.0, false)?.as_vec3();
             let cutoff_angle = p.float("cutoff_angle", 20.0)?;
