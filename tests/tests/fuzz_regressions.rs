@@ -37,6 +37,11 @@ fn obj_regressions() {
 }
 
 #[test]
+fn gltf_regressions() {
+    replay("gltf", radia_formats::fuzzing::gltf);
+}
+
+#[test]
 fn image_regressions() {
     replay("image", fuzzing::image);
 }

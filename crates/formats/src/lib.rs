@@ -12,6 +12,7 @@
 //! into this crate (issue #10's layout item), so that `crates/scene` knows no file format;
 //! [`load_scene`] already hides where they are.
 
+pub mod fuzzing;
 pub mod gltf;
 
 pub use gltf::{load_gltf, load_gltf_with_warnings, GltfOptions};
