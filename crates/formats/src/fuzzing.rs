@@ -13,7 +13,11 @@ pub fn gltf(data: &[u8]) {
     if std::fs::create_dir_all(&dir).is_err() {
         return;
     }
-    let name = if data.starts_with(b"glTF") { "input.glb" } else { "input.gltf" };
+    let name = if data.starts_with(b"glTF") {
+        "input.glb"
+    } else {
+        "input.gltf"
+    };
     let path = dir.join(name);
     let written = std::fs::File::create(&path).and_then(|mut f| f.write_all(data));
     if written.is_err() {
