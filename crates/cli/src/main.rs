@@ -71,8 +71,9 @@ enum Command {
         #[arg(long, value_name = "uniform|power|bvh")]
         light_sampler: Option<LightSamplerKind>,
         /// Render passes of 16 spp until the next one would end after SECONDS, then write
-        /// the image (up to --spp if given, else without a sample limit).
-        #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+        /// the image (up to --spp if given, else without a sample limit). `--time` is the
+        /// same option.
+        #[arg(long, visible_alias = "time", value_name = "SECONDS", value_parser = parse_seconds)]
         time_budget: Option<Duration>,
         /// Render only the sample indices A..B (B excluded) of the --spp of every pixel, to a
         /// partial EXR (weighted sums and weights, with the seed, range, spp and scene

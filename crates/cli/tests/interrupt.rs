@@ -108,8 +108,9 @@ fn time_budget_writes_what_the_time_allowed_and_exits_0() {
     assert!(secs < 1.5 + 1.0, "took {secs} s");
     assert!(out.exists());
 
-    // With --spp as well, the render stops at whichever comes first.
-    let res = start(&scene, &out, &["--time-budget", "60", "--spp", "32"])
+    // With --spp as well, the render stops at whichever comes first (and `--time` is the
+    // issue's name for the same option).
+    let res = start(&scene, &out, &["--time", "60", "--spp", "32"])
         .wait_with_output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&res.stderr);
