@@ -6,6 +6,8 @@ use radia_bsdf::{Bsdf, Texture};
 use radia_math::Spectrum;
 use radia_sampling::SamplerKind;
 
+pub use crate::aov::{parse_aovs, AovDesc, AovKind, AovOutput};
+
 /// Mitsuba's `path` integrator parameters (`src/integrators/path.cpp`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct IntegratorDesc {
@@ -15,6 +17,8 @@ pub struct IntegratorDesc {
     pub rr_depth: i32,
     /// Camera rays see through area emitters and escaped primary rays give 0.
     pub hide_emitters: bool,
+    /// Mitsuba's `aov` integrator around the one above: the outputs written beside the image.
+    pub aov: Option<AovDesc>,
 }
 
 impl Default for IntegratorDesc {
@@ -23,6 +27,7 @@ impl Default for IntegratorDesc {
             max_depth: -1,
             rr_depth: 5,
             hide_emitters: false,
+            aov: None,
         }
     }
 }

@@ -10,7 +10,8 @@ use super::transform;
 use super::xml::{Doc, Kind};
 use super::LoadError;
 use crate::{
-    CameraDesc, EmitterDesc, FilmDesc, FilterDesc, IntegratorDesc, SamplerDesc, SceneDescription,
+    parse_aovs, AovDesc, CameraDesc, EmitterDesc, FilmDesc, FilterDesc, IntegratorDesc,
+    SamplerDesc, SceneDescription,
 };
 use glam::Affine3A;
 use radia_bsdf::{Bsdf, Texture};
@@ -122,12 +123,16 @@ pub(crate) fn build_scene(doc: &Doc) -> Result<(SceneDescription, Vec<String>), 
     Ok((desc, b.warnings))
 }
 
-/// `path` (`src/integrators/path.cpp` and `MonteCarloIntegrator` in `src/render/integrator.cpp`).
+/// `path` (`src/integrators/path.cpp` and `MonteCarloIntegrator` in `src/render/integrator.cpp`),
+/// or `aov` (`src/integrators/aov.cpp`) around it.
 fn build_integrator(b: &Builder<'_>, idx: usize) -> Result<IntegratorDesc, LoadError> {
     let mut p = Props::new(b.doc, idx);
+    if p.node.plugin == "aov" {
+        return build_aov_integrator(b, p);
+    }
     if p.node.plugin != "path" {
         return Err(p.err(format!(
-            "unsupported integrator plugin type \"{}\" (radia supports: path)",
+            "unsupported integrator plugin type \"{}\" (radia supports: path, aov)",
             p.node.plugin
         )));
     }
@@ -151,7 +156,47 @@ fn build_integrator(b: &Builder<'_>, idx: usize) -> Result<IntegratorDesc, LoadE
         max_depth: max_depth as i32,
         rr_depth: rr_depth as i32,
         hide_emitters,
+        aov: None,
     })
+}
+
+/// Mitsuba's `aov` integrator: the `aovs` string and at most one nested integrator, whose
+/// name (`_arg_0` when unnamed, as Mitsuba names it) becomes the beauty layer. Mitsuba takes
+/// several nested integrators; radia renders one image per run and refuses more.
+fn build_aov_integrator(b: &Builder<'_>, mut p: Props<'_>) -> Result<IntegratorDesc, LoadError> {
+    let Some(spec) = p.string_opt("aovs")? else {
+        return Err(p.err("the aov integrator needs the string parameter \"aovs\""));
+    };
+    let outputs = parse_aovs(spec).map_err(|e| p.err_at(p.pos_of("aovs"), e))?;
+    let mut nested: Option<(String, IntegratorDesc)> = None;
+    for (i, n, kind) in p.objects() {
+        if kind != Kind::Integrator {
+            continue;
+        }
+        p.take(i);
+        if nested.is_some() {
+            return Err(p.err_at(
+                p.prop_pos(i),
+                "radia's aov integrator takes one nested integrator (Mitsuba's takes several)",
+            ));
+        }
+        if b.doc.nodes[n].plugin == "aov" {
+            return Err(p.err_at(p.prop_pos(i), "an aov integrator cannot nest another one"));
+        }
+        let name = p.node.props[i].name.clone();
+        nested = Some((name, build_integrator(b, n)?));
+    }
+    p.finish()?;
+    let (beauty_layer, mut desc) = match nested {
+        Some((name, desc)) => (Some(name), desc),
+        None => (None, IntegratorDesc::default()),
+    };
+    desc.aov = Some(AovDesc {
+        outputs,
+        has_beauty: beauty_layer.is_some(),
+        beauty_layer,
+    });
+    Ok(desc)
 }
 
 /// Mitsuba's `parse_fov` (`src/render/sensor.cpp`): the horizontal field of view in degrees
