@@ -1,6 +1,7 @@
 //! Rendering: the path integrator, the film and the parallel tile renderer.
 
 pub mod aov;
+pub mod classic;
 pub mod film;
 pub mod image_io;
 pub mod part;

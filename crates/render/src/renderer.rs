@@ -11,6 +11,7 @@
 //! as the whole render does.
 
 use crate::aov::{AovFilm, AovIntegrator, AovLayers};
+use crate::classic::ClassicIntegrator;
 use crate::film::{Film, Filter, Image};
 use crate::path::{layout, PathIntegrator, PathStats};
 use glam::{UVec2, Vec2};
@@ -183,18 +184,68 @@ pub fn render_part_until(
     let sampler = AnySampler::new(options.sampler, options.spp);
     let end = samples.end.min(sampler.sample_count());
     let samples = SampleRange::new(samples.start.min(end), end);
-    match &scene.integrator.aov {
-        None => with_sampler!(&sampler, s => {
-            render_with(scene, s, &NoExtras, options.seed, samples, deadline, cancel, progress).0
-        }),
-        Some(desc) => {
+    macro_rules! go {
+        ($integrator:expr, $extras:expr) => {
+            with_sampler!(&sampler, s => {
+                render_with(scene, s, $integrator, $extras, options.seed, samples, deadline, cancel, progress)
+            })
+        };
+    }
+    let path = PathIntegrator::new(scene);
+    let classic = scene
+        .integrator
+        .classic
+        .as_ref()
+        .map(|d| ClassicIntegrator::new(scene, d));
+    match (&scene.integrator.aov, &classic) {
+        (None, None) => go!(&path, &NoExtras).0,
+        (None, Some(c)) => go!(c, &NoExtras).0,
+        (Some(desc), classic) => {
             let aov = AovIntegrator::new(scene, desc);
-            let (mut out, film) = with_sampler!(&sampler, s => {
-                render_with(scene, s, &aov, options.seed, samples, deadline, cancel, progress)
-            });
+            let (mut out, film) = match classic {
+                None => go!(&path, &aov),
+                Some(c) => go!(c, &aov),
+            };
             out.aovs = Some(film.0);
             out
         }
+    }
+}
+
+/// The radiance estimate of one camera ray: the path tracer or another integrator, chosen
+/// once per render so that each compiles into its own tile loop.
+trait Integrator: Sync {
+    fn li<S: Sampler>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        sampler: &mut SampleStream<'_, S>,
+        stats: &mut PathStats,
+    ) -> Spectrum;
+}
+
+impl Integrator for PathIntegrator {
+    #[inline(always)]
+    fn li<S: Sampler>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        sampler: &mut SampleStream<'_, S>,
+        stats: &mut PathStats,
+    ) -> Spectrum {
+        PathIntegrator::li(self, scene, ray, sampler, stats)
+    }
+}
+
+impl Integrator for ClassicIntegrator<'_> {
+    fn li<S: Sampler>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        sampler: &mut SampleStream<'_, S>,
+        stats: &mut PathStats,
+    ) -> Spectrum {
+        ClassicIntegrator::li(self, scene, ray, sampler, stats)
     }
 }
 
@@ -248,9 +299,10 @@ impl Extras for AovIntegrator<'_> {
 
 /// [`render`] with a concrete sampler, so that its calls inline into the path loop.
 #[allow(clippy::too_many_arguments)]
-fn render_with<S: Sampler, E: Extras>(
+fn render_with<S: Sampler, I: Integrator, E: Extras>(
     scene: &Scene,
     sampler: &S,
+    integrator: &I,
     extras: &E,
     seed: u64,
     samples: SampleRange,
@@ -263,7 +315,6 @@ fn render_with<S: Sampler, E: Extras>(
     let (w, h) = (scene.film.width, scene.film.height);
     let filter = Filter::new(scene.film.filter);
     let margin = (filter.radius() - 0.5).ceil().max(0.0) as i32;
-    let integrator = PathIntegrator::new(scene);
     let mut film = Film::new(0, 0, w, h, filter);
     let mut extras_film = extras.film(0, 0, w, h, filter);
     let mut stats = RenderStats::default();

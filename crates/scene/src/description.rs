@@ -19,6 +19,33 @@ pub struct IntegratorDesc {
     pub hide_emitters: bool,
     /// Mitsuba's `aov` integrator around the one above: the outputs written beside the image.
     pub aov: Option<AovDesc>,
+    /// radia's `classic` integrator instead of the path tracer (`max_depth` then bounds the
+    /// Whitted recursion).
+    pub classic: Option<ClassicDesc>,
+}
+
+/// How the `classic` integrator shades a triangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ClassicShading {
+    /// One evaluation per triangle: at its centroid with its face normal.
+    Flat,
+    /// Lighting evaluated at the three vertices (vertex normals) and interpolated.
+    Gouraud,
+    /// Normals interpolated, lighting evaluated at every hit.
+    Phong,
+}
+
+/// radia's `classic` integrator: textbook local illumination (see `radia_render::classic`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClassicDesc {
+    /// Ambient radiance, multiplied by the material's diffuse reflectance.
+    pub ambient: Spectrum,
+    /// (a, b, c) of the attenuation 1/(a + b·d + c·d²) of point and spot lights; (0, 0, 1)
+    /// is the inverse-square law.
+    pub attenuation: [f32; 3],
+    pub shading: ClassicShading,
+    /// Shadow rays (hard shadows) on or off.
+    pub shadows: bool,
 }
 
 impl Default for IntegratorDesc {
@@ -28,6 +55,7 @@ impl Default for IntegratorDesc {
             rr_depth: 5,
             hide_emitters: false,
             aov: None,
+            classic: None,
         }
     }
 }

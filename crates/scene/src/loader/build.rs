@@ -10,7 +10,7 @@ use super::transform;
 use super::xml::{Doc, Kind};
 use super::LoadError;
 use crate::{
-    parse_aovs, AovDesc, CameraDesc, EmitterDesc, FilmDesc, FilterDesc, IntegratorDesc,
+    parse_aovs, AovDesc, CameraDesc, ClassicDesc, ClassicShading, EmitterDesc, FilmDesc, FilterDesc, IntegratorDesc,
     SamplerDesc, SceneDescription,
 };
 use glam::Affine3A;
@@ -130,9 +130,12 @@ fn build_integrator(b: &Builder<'_>, idx: usize) -> Result<IntegratorDesc, LoadE
     if p.node.plugin == "aov" {
         return build_aov_integrator(b, p);
     }
+    if p.node.plugin == "classic" {
+        return build_classic_integrator(p);
+    }
     if p.node.plugin != "path" {
         return Err(p.err(format!(
-            "unsupported integrator plugin type \"{}\" (radia supports: path, aov)",
+            "unsupported integrator plugin type \"{}\" (radia supports: path, aov, classic)",
             p.node.plugin
         )));
     }
@@ -157,6 +160,57 @@ fn build_integrator(b: &Builder<'_>, idx: usize) -> Result<IntegratorDesc, LoadE
         rr_depth: rr_depth as i32,
         hide_emitters,
         aov: None,
+        classic: None,
+    })
+}
+
+/// radia's `classic` integrator (`radia_render::classic`): `ambient` (rgb, default 0),
+/// `attenuation` ("a, b, c", default "0, 0, 1"), `shading` (flat, gouraud, phong; default
+/// phong), `shadows` (default true), `max_depth` (Whitted recursion, default 5).
+fn build_classic_integrator(mut p: Props<'_>) -> Result<IntegratorDesc, LoadError> {
+    let ambient = p.color("ambient", 0.0, false)?;
+    let attenuation = match p.string_opt("attenuation")? {
+        None => [0.0, 0.0, 1.0],
+        Some(text) => {
+            let v: Vec<f32> = text
+                .split(',')
+                .map(|t| t.trim().parse::<f32>())
+                .collect::<Result<_, _>>()
+                .map_err(|_| p.err_at(p.pos_of("attenuation"), format!("\"attenuation\" must be three numbers a, b, c, got \"{text}\"")))?;
+            let ok = v.len() == 3 && v.iter().all(|x| x.is_finite() && *x >= 0.0) && v.iter().any(|x| *x > 0.0);
+            if !ok {
+                return Err(p.err_at(
+                    p.pos_of("attenuation"),
+                    format!("\"attenuation\" must be three non-negative numbers a, b, c, not all 0, got \"{text}\""),
+                ));
+            }
+            [v[0], v[1], v[2]]
+        }
+    };
+    let shading = match p.string_opt("shading")?.unwrap_or("phong") {
+        "flat" => ClassicShading::Flat,
+        "gouraud" => ClassicShading::Gouraud,
+        "phong" => ClassicShading::Phong,
+        other => {
+            return Err(p.err_at(
+                p.pos_of("shading"),
+                format!("unknown shading \"{other}\" (use flat, gouraud or phong)"),
+            ))
+        }
+    };
+    let shadows = p.boolean("shadows", true)?;
+    let max_depth = p.int("max_depth", 5, 1, 64)?;
+    p.finish()?;
+    let c = |v: f64| v as f32;
+    Ok(IntegratorDesc {
+        max_depth: max_depth as i32,
+        classic: Some(ClassicDesc {
+            ambient: radia_math::Spectrum::new(c(ambient.x), c(ambient.y), c(ambient.z)),
+            attenuation,
+            shading,
+            shadows,
+        }),
+        ..IntegratorDesc::default()
     })
 }
 

@@ -490,6 +490,7 @@ fn loader_film_sampler_integrator() {
             rr_depth: 3,
             hide_emitters: true,
             aov: None,
+            classic: None,
         }
     );
     assert_eq!(
@@ -626,6 +627,35 @@ fn loader_aov_integrator() {
             r#"<integrator type="aov"><string name="aovs" value="a:uv"/><integer name="max_depth" value="3"/></integrator>"#,
             "unexpected parameter \"max_depth\"",
         ),
+    ] {
+        expect_err(load(name, body), needle);
+    }
+}
+
+#[test]
+fn loader_classic_integrator() {
+    use crate::{ClassicDesc, ClassicShading};
+    let s = load_ok(
+        "classic",
+        r#"<integrator type="classic"><rgb name="ambient" value="0.1"/><string name="attenuation" value="1, 0.5, 0"/>
+             <string name="shading" value="gouraud"/><boolean name="shadows" value="false"/><integer name="max_depth" value="3"/></integrator>"#,
+    );
+    assert_eq!(s.integrator.max_depth, 3);
+    assert_eq!(
+        s.integrator.classic,
+        Some(ClassicDesc {
+            ambient: radia_math::Spectrum::splat(0.1),
+            attenuation: [1.0, 0.5, 0.0],
+            shading: ClassicShading::Gouraud,
+            shadows: false,
+        })
+    );
+    for (name, body, needle) in [
+        ("classic-shading", r#"<integrator type="classic"><string name="shading" value="smooth"/></integrator>"#, "unknown shading \"smooth\""),
+        ("classic-att", r#"<integrator type="classic"><string name="attenuation" value="1, 2"/></integrator>"#, "three non-negative numbers"),
+        ("classic-att0", r#"<integrator type="classic"><string name="attenuation" value="0, 0, 0"/></integrator>"#, "not all 0"),
+        ("classic-att-text", r#"<integrator type="classic"><string name="attenuation" value="a, b, c"/></integrator>"#, "must be three numbers"),
+        ("classic-depth", r#"<integrator type="classic"><integer name="max_depth" value="0"/></integrator>"#, "max_depth"),
     ] {
         expect_err(load(name, body), needle);
     }
