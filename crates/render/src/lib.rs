@@ -2,6 +2,7 @@
 
 pub mod aov;
 pub mod classic;
+pub mod npr;
 pub mod film;
 pub mod image_io;
 pub mod part;

@@ -12,6 +12,7 @@
 
 use crate::aov::{AovFilm, AovIntegrator, AovLayers};
 use crate::classic::ClassicIntegrator;
+use crate::npr::NprIntegrator;
 use crate::film::{Film, Filter, Image};
 use crate::path::{layout, PathIntegrator, PathStats};
 use glam::{UVec2, Vec2};
@@ -192,19 +193,18 @@ pub fn render_part_until(
         };
     }
     let path = PathIntegrator::new(scene);
-    let classic = scene
-        .integrator
-        .classic
-        .as_ref()
-        .map(|d| ClassicIntegrator::new(scene, d));
-    match (&scene.integrator.aov, &classic) {
-        (None, None) => go!(&path, &NoExtras).0,
-        (None, Some(c)) => go!(c, &NoExtras).0,
-        (Some(desc), classic) => {
+    let classic = scene.integrator.classic.as_ref().map(|d| ClassicIntegrator::new(scene, d));
+    let npr = scene.integrator.npr.as_ref().map(|d| NprIntegrator::new(scene, d));
+    match (&scene.integrator.aov, &classic, &npr) {
+        (None, Some(c), _) => go!(c, &NoExtras).0,
+        (None, None, Some(n)) => go!(n, &NoExtras).0,
+        (None, None, None) => go!(&path, &NoExtras).0,
+        (Some(desc), classic, npr) => {
             let aov = AovIntegrator::new(scene, desc);
-            let (mut out, film) = match classic {
-                None => go!(&path, &aov),
-                Some(c) => go!(c, &aov),
+            let (mut out, film) = match (classic, npr) {
+                (Some(c), _) => go!(c, &aov),
+                (None, Some(n)) => go!(n, &aov),
+                (None, None) => go!(&path, &aov),
             };
             out.aovs = Some(film.0);
             out
@@ -215,10 +215,13 @@ pub fn render_part_until(
 /// The radiance estimate of one camera ray: the path tracer or another integrator, chosen
 /// once per render so that each compiles into its own tile loop.
 trait Integrator: Sync {
+    /// `pos` is the sample's film position in pixels (the NPR integrator traces its
+    /// neighbours' rays from it).
     fn li<S: Sampler>(
         &self,
         scene: &Scene,
         ray: Ray,
+        pos: Vec2,
         sampler: &mut SampleStream<'_, S>,
         stats: &mut PathStats,
     ) -> Spectrum;
@@ -230,6 +233,7 @@ impl Integrator for PathIntegrator {
         &self,
         scene: &Scene,
         ray: Ray,
+        _pos: Vec2,
         sampler: &mut SampleStream<'_, S>,
         stats: &mut PathStats,
     ) -> Spectrum {
@@ -242,10 +246,24 @@ impl Integrator for ClassicIntegrator<'_> {
         &self,
         scene: &Scene,
         ray: Ray,
+        _pos: Vec2,
         sampler: &mut SampleStream<'_, S>,
         stats: &mut PathStats,
     ) -> Spectrum {
         ClassicIntegrator::li(self, scene, ray, sampler, stats)
+    }
+}
+
+impl Integrator for NprIntegrator<'_> {
+    fn li<S: Sampler>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        pos: Vec2,
+        _sampler: &mut SampleStream<'_, S>,
+        stats: &mut PathStats,
+    ) -> Spectrum {
+        NprIntegrator::li(self, scene, ray, pos, stats)
     }
 }
 
@@ -359,7 +377,7 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
                             let ray = scene.camera.generate_ray(film_pos);
                             extras.add(scene, &mut tile_extras, pos, &ray);
                             let l = if extras.beauty() {
-                                integrator.li(scene, ray, &mut stream, &mut pstats)
+                                integrator.li(scene, ray, pos, &mut stream, &mut pstats)
                             } else {
                                 Spectrum::ZERO
                             };

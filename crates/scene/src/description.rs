@@ -22,6 +22,32 @@ pub struct IntegratorDesc {
     /// radia's `classic` integrator instead of the path tracer (`max_depth` then bounds the
     /// Whitted recursion).
     pub classic: Option<ClassicDesc>,
+    /// radia's `npr` integrator instead of the path tracer.
+    pub npr: Option<NprDesc>,
+}
+
+/// How the `npr` integrator fills surfaces.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum NprStyle {
+    /// Lambert's cos θ quantised to `levels` bands.
+    Toon { levels: u32 },
+    /// Gooch et al. 1998: k_cool = (0, 0, b) + α·kd, k_warm = (y, y, 0) + β·kd, blended by
+    /// (1 + l·n)/2.
+    Gooch { b: f32, y: f32, alpha: f32, beta: f32 },
+}
+
+/// radia's `npr` integrator (see `radia_render::npr`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NprDesc {
+    pub style: NprStyle,
+    /// Line width in pixels (0: no lines).
+    pub line_width: f32,
+    pub line_color: Spectrum,
+    /// Neighbouring normals further apart than this (degrees) make a crease line.
+    pub crease_angle: f32,
+    /// A neighbour farther off the tangent plane than this fraction of the distance makes
+    /// a silhouette line.
+    pub depth_threshold: f32,
 }
 
 /// How the `classic` integrator shades a triangle.
@@ -56,6 +82,7 @@ impl Default for IntegratorDesc {
             hide_emitters: false,
             aov: None,
             classic: None,
+            npr: None,
         }
     }
 }

@@ -10,7 +10,7 @@ use super::transform;
 use super::xml::{Doc, Kind};
 use super::LoadError;
 use crate::{
-    parse_aovs, AovDesc, CameraDesc, ClassicDesc, ClassicShading, EmitterDesc, FilmDesc, FilterDesc, IntegratorDesc,
+    parse_aovs, AovDesc, CameraDesc, ClassicDesc, ClassicShading, NprDesc, NprStyle, EmitterDesc, FilmDesc, FilterDesc, IntegratorDesc,
     SamplerDesc, SceneDescription,
 };
 use glam::Affine3A;
@@ -133,9 +133,12 @@ fn build_integrator(b: &Builder<'_>, idx: usize) -> Result<IntegratorDesc, LoadE
     if p.node.plugin == "classic" {
         return build_classic_integrator(p);
     }
+    if p.node.plugin == "npr" {
+        return build_npr_integrator(p);
+    }
     if p.node.plugin != "path" {
         return Err(p.err(format!(
-            "unsupported integrator plugin type \"{}\" (radia supports: path, aov, classic)",
+            "unsupported integrator plugin type \"{}\" (radia supports: path, aov, classic, npr)",
             p.node.plugin
         )));
     }
@@ -161,6 +164,7 @@ fn build_integrator(b: &Builder<'_>, idx: usize) -> Result<IntegratorDesc, LoadE
         hide_emitters,
         aov: None,
         classic: None,
+        npr: None,
     })
 }
 
@@ -209,6 +213,51 @@ fn build_classic_integrator(mut p: Props<'_>) -> Result<IntegratorDesc, LoadErro
             attenuation,
             shading,
             shadows,
+        }),
+        ..IntegratorDesc::default()
+    })
+}
+
+/// radia's `npr` integrator (`radia_render::npr`): `style` toon (`levels`, default 4) or
+/// gooch (`b` 0.4, `y` 0.4, `alpha` 0.2, `beta` 0.6, Gooch et al. 1998's values);
+/// `line_width` (pixels, default 1), `line_color` (default black), `crease_angle`
+/// (degrees, default 60), `depth_threshold` (default 0.05).
+fn build_npr_integrator(mut p: Props<'_>) -> Result<IntegratorDesc, LoadError> {
+    let style = match p.string_opt("style")?.unwrap_or("toon") {
+        "toon" => NprStyle::Toon {
+            levels: p.int("levels", 4, 1, 256)? as u32,
+        },
+        "gooch" => NprStyle::Gooch {
+            b: p.float("b", 0.4)? as f32,
+            y: p.float("y", 0.4)? as f32,
+            alpha: p.float("alpha", 0.2)? as f32,
+            beta: p.float("beta", 0.6)? as f32,
+        },
+        other => {
+            return Err(p.err_at(
+                p.pos_of("style"),
+                format!("unknown style \"{other}\" (use toon or gooch)"),
+            ))
+        }
+    };
+    let line_width = p.float("line_width", 1.0)?;
+    if !(0.0..=64.0).contains(&line_width) {
+        return Err(p.err_at(p.pos_of("line_width"), format!("\"line_width\" must be in [0, 64] pixels, got {line_width}")));
+    }
+    let lc = p.color("line_color", 0.0, false)?;
+    let crease_angle = p.float("crease_angle", 60.0)?;
+    let depth_threshold = p.float("depth_threshold", 0.05)?;
+    if !(depth_threshold > 0.0) || !(0.0..=180.0).contains(&crease_angle) {
+        return Err(p.err("\"depth_threshold\" must be > 0 and \"crease_angle\" in [0, 180] degrees"));
+    }
+    p.finish()?;
+    Ok(IntegratorDesc {
+        npr: Some(NprDesc {
+            style,
+            line_width: line_width as f32,
+            line_color: radia_math::Spectrum::new(lc.x as f32, lc.y as f32, lc.z as f32),
+            crease_angle: crease_angle as f32,
+            depth_threshold: depth_threshold as f32,
         }),
         ..IntegratorDesc::default()
     })

@@ -491,6 +491,7 @@ fn loader_film_sampler_integrator() {
             hide_emitters: true,
             aov: None,
             classic: None,
+            npr: None,
         }
     );
     assert_eq!(
