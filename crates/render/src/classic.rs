@@ -193,7 +193,8 @@ impl<'a> ClassicIntegrator<'a> {
             };
             let wo = si.frame.to_local(es.d);
             let f = bsdf.eval(&sp, si.wi, wo);
-            if f == Spectrum::ZERO || !(es.pdf > 0.0) {
+            let pdf_positive = es.pdf > 0.0; // false for NaN too
+            if f == Spectrum::ZERO || !pdf_positive {
                 continue;
             }
             let mut e = es.radiance / es.pdf * count as f32;
@@ -225,7 +226,8 @@ fn barycentric(p: Vec3, t: [Vec3; 3]) -> [f32; 3] {
     let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
     let (d1, d2) = (d.dot(e1), d.dot(e2));
     let det = d11 * d22 - d12 * d12;
-    if !(det.abs() > 0.0) {
+    let degenerate = det.is_nan() || det == 0.0;
+    if degenerate {
         return [1.0 / 3.0; 3];
     }
     let b1 = ((d22 * d1 - d12 * d2) / det).clamp(0.0, 1.0);

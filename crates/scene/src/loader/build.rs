@@ -247,7 +247,8 @@ fn build_npr_integrator(mut p: Props<'_>) -> Result<IntegratorDesc, LoadError> {
     let lc = p.color("line_color", 0.0, false)?;
     let crease_angle = p.float("crease_angle", 60.0)?;
     let depth_threshold = p.float("depth_threshold", 0.05)?;
-    if !(depth_threshold > 0.0) || !(0.0..=180.0).contains(&crease_angle) {
+    let threshold_ok = depth_threshold > 0.0; // false for NaN too
+    if !threshold_ok || !(0.0..=180.0).contains(&crease_angle) {
         return Err(p.err("\"depth_threshold\" must be > 0 and \"crease_angle\" in [0, 180] degrees"));
     }
     p.finish()?;
