@@ -60,7 +60,7 @@ impl Blend {
 
     /// The weight at `sp`.
     #[inline]
-    fn weight_at(&self, sp: &ShadingPoint) -> f32 {
+    pub(crate) fn weight_at(&self, sp: &ShadingPoint) -> f32 {
         match &self.weight_texture {
             None => self.weight,
             Some(t) => {

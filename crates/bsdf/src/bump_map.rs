@@ -52,7 +52,7 @@ impl BumpMap {
 
     /// The bumped frame relative to the shading frame (Mitsuba's `frame()`).
     #[inline]
-    fn frame(&self, sp: &ShadingPoint, wi: Vec3) -> Option<Frame> {
+    pub(crate) fn frame(&self, sp: &ShadingPoint, wi: Vec3) -> Option<Frame> {
         let grad = self.height.eval_1_grad(sp)? * self.scale;
         let dp_du = sp.dp_du + Vec3::Z * (grad.x - sp.dp_du.z);
         let dp_dv = sp.dp_dv + Vec3::Z * (grad.y - sp.dp_dv.z);

@@ -49,6 +49,7 @@
 use glam::{Vec2, Vec3};
 use radia_math::Spectrum;
 
+mod aov;
 mod blend;
 mod blinn_phong;
 mod bump_map;

@@ -43,7 +43,7 @@ impl NormalMap {
 
     /// The perturbed frame relative to the shading frame (Mitsuba's `frame()`, first part).
     #[inline]
-    fn frame(&self, sp: &ShadingPoint, wi: Vec3) -> Option<Frame> {
+    pub(crate) fn frame(&self, sp: &ShadingPoint, wi: Vec3) -> Option<Frame> {
         let n = self.normalmap.eval(sp) * 2.0 - Vec3::ONE;
         frame_from(self.options.flip(n, wi), Vec3::X)
     }

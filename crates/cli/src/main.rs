@@ -9,11 +9,12 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use radia_render::part::{read_part, write_part, Merger, Part, RenderIdentity};
 use radia_render::{
-    image_io::write_image, render_part_until, render_until, RenderOptions, SampleRange,
+    image_io::{write_image, write_image_with_aovs},
+    render_part_until, render_until, RenderOptions, SampleRange,
 };
 use radia_sampling::SamplerKind;
 use radia_formats::{load_scene, GltfOptions, SceneFormat, SceneOptions};
-use radia_scene::{FilterDesc, LightSamplerKind, Scene};
+use radia_scene::{parse_aovs, AovDesc, FilterDesc, LightSamplerKind, Scene};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
@@ -88,6 +89,12 @@ enum Command {
         /// and no emissive material, else none; 0 for none).
         #[arg(long, value_name = "RADIANCE")]
         environment: Option<f32>,
+        /// Also write AOVs, as if the scene's integrator were nested in Mitsuba's `aov`
+        /// integrator with this `aovs` string: NAME:TYPE pairs such as
+        /// `dd:depth,nn:sh_normal,albedo:albedo` (types: albedo, depth, position, uv,
+        /// geo_normal, sh_normal, dp_du, dp_dv, prim_index, shape_index). EXR output only.
+        #[arg(long, value_name = "LIST")]
+        aov: Option<String>,
     },
     /// Merge partial renders (`render --samples`) of one scene into its image: the same image,
     /// up to float rounding, as one render of all their samples. Refuses parts of different
@@ -230,6 +237,7 @@ fn run_render(command: Command) -> Result<ExitCode, String> {
         samples,
         camera,
         environment,
+        aov,
     } = command
     else {
         unreachable!("run_render is called with Command::Render")
@@ -286,6 +294,38 @@ fn run_render(command: Command) -> Result<ExitCode, String> {
     }
     if let Some(f) = rfilter {
         desc.film.filter = f;
+    }
+    if let Some(list) = &aov {
+        if desc.integrator.aov.is_some() {
+            return Err(format!(
+                "--aov: {}: the scene's integrator already is an aov integrator",
+                scene_path.display()
+            ));
+        }
+        let outputs = parse_aovs(list).map_err(|e| format!("--aov: {e}"))?;
+        desc.integrator.aov = Some(AovDesc {
+            outputs,
+            beauty_layer: None,
+            has_beauty: true,
+        });
+    }
+    if desc.integrator.aov.is_some() {
+        // Parts carry only the image's sums; refuse rather than drop the AOVs silently.
+        if samples.is_some() {
+            return Err(format!(
+                "--samples: {}: split renders do not carry AOVs; render AOVs in one piece",
+                scene_path.display()
+            ));
+        }
+        if !output
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+        {
+            return Err(format!(
+                "{}: AOV layers need an OpenEXR output (.exr); PNG holds only the image",
+                output.display()
+            ));
+        }
     }
     // What the parts of a split render must agree on (the film overrides are in `desc`).
     let fingerprint = desc.fingerprint();
@@ -369,7 +409,7 @@ fn run_render(command: Command) -> Result<ExitCode, String> {
             bar.set_position(done)
         });
         let secs = t_render.elapsed().as_secs_f64();
-        (out.stats, Output::Image(out.image), secs)
+        (out.stats, Output::Image(out.image, out.aovs), secs)
     };
     bar.finish_and_clear();
 
@@ -383,7 +423,9 @@ fn run_render(command: Command) -> Result<ExitCode, String> {
         return Ok(ExitCode::from(interrupted.map_or(1, |s| 128 + s) as u8));
     }
     match &image {
-        Output::Image(image) => write_image(image, &output).map_err(|e| e.to_string())?,
+        Output::Image(image, aovs) => {
+            write_image_with_aovs(image, aovs.as_ref(), &output).map_err(|e| e.to_string())?
+        }
         Output::Part(part) => write_part(part, &output).map_err(|e| e.to_string())?,
     }
     if let Some(sig) = interrupted {
@@ -420,7 +462,8 @@ fn run_render(command: Command) -> Result<ExitCode, String> {
 
 /// What a render writes: the image, or a partial render (`--samples`) for `radia merge`.
 enum Output {
-    Image(radia_render::Image),
+    /// The image and its AOV layers, if any.
+    Image(radia_render::Image, Option<radia_render::AovLayers>),
     Part(Part),
 }
 

@@ -3,6 +3,7 @@
 //! Files are written to a temporary name beside the target and renamed into place, so a
 //! failed or interrupted write never leaves a half-written image.
 
+use crate::aov::AovLayers;
 use crate::film::Image;
 use std::path::{Path, PathBuf};
 
@@ -12,6 +13,8 @@ pub enum ImageError {
     UnsupportedFormat { path: PathBuf },
     #[error("{path}: {message}")]
     Write { path: PathBuf, message: String },
+    #[error("{path}: AOV layers need an OpenEXR output (.exr); PNG holds only the image")]
+    AovsNeedExr { path: PathBuf },
 }
 
 /// The sRGB transfer function of a linear value in [0, 1].
@@ -24,6 +27,17 @@ pub fn linear_to_srgb(v: f32) -> f32 {
 }
 
 pub fn write_image(image: &Image, path: &Path) -> Result<(), ImageError> {
+    write_image_with_aovs(image, None, path)
+}
+
+/// [`write_image`] with AOV layers beside the image: an EXR whose channels are the image's
+/// R, G, B and every AOV channel under its Mitsuba name (`nn.X`, `dd.y.T`, ...), float32;
+/// OpenEXR keeps channels sorted by name, as in the files Mitsuba writes.
+pub fn write_image_with_aovs(
+    image: &Image,
+    aovs: Option<&AovLayers>,
+    path: &Path,
+) -> Result<(), ImageError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -37,8 +51,42 @@ pub fn write_image(image: &Image, path: &Path) -> Result<(), ImageError> {
         path: path.to_path_buf(),
         message,
     };
-    match ext.as_deref() {
-        Some("exr") => {
+    match (ext.as_deref(), aovs) {
+        (Some("exr"), Some(layers)) => {
+            use exr::prelude::{AnyChannel, AnyChannels, FlatSamples, WritableImage};
+            let (w, h) = (image.width as usize, image.height as usize);
+            let rgb =
+                |c: usize| -> Vec<f32> { image.pixels.iter().map(|p| p.to_array()[c]).collect() };
+            let mut channels: Vec<AnyChannel<FlatSamples>> = ["R", "G", "B"]
+                .iter()
+                .enumerate()
+                .map(|(c, n)| AnyChannel::new(*n, FlatSamples::F32(rgb(c))))
+                .collect();
+            for (name, plane) in layers.names.iter().zip(&layers.planes) {
+                channels.push(AnyChannel::new(
+                    name.as_str(),
+                    FlatSamples::F32(plane.clone()),
+                ));
+            }
+            let layer = exr::prelude::Layer::new(
+                (w, h),
+                exr::prelude::LayerAttributes::default(),
+                exr::prelude::Encoding::FAST_LOSSLESS,
+                AnyChannels::sort(channels.into()),
+            );
+            let mut bytes = std::io::Cursor::new(Vec::new());
+            exr::prelude::Image::from_layer(layer)
+                .write()
+                .to_buffered(&mut bytes)
+                .map_err(|e| err(e.to_string()))?;
+            std::fs::write(&tmp, bytes.into_inner()).map_err(|e| err(e.to_string()))?;
+        }
+        (_, Some(_)) => {
+            return Err(ImageError::AovsNeedExr {
+                path: path.to_path_buf(),
+            })
+        }
+        (Some("exr"), None) => {
             let (w, h) = (image.width as usize, image.height as usize);
             use exr::prelude::*;
             let mut bytes = std::io::Cursor::new(Vec::new());
@@ -52,7 +100,7 @@ pub fn write_image(image: &Image, path: &Path) -> Result<(), ImageError> {
                 .map_err(|e| err(e.to_string()))?;
             std::fs::write(&tmp, bytes.into_inner()).map_err(|e| err(e.to_string()))?;
         }
-        Some("png") => {
+        (Some("png"), None) => {
             let mut buf = image::RgbImage::new(image.width, image.height);
             for (i, px) in buf.pixels_mut().enumerate() {
                 let p = image.pixels[i];

@@ -1,13 +1,17 @@
 //! Rendering: the path integrator, the film and the parallel tile renderer.
 
+pub mod aov;
+pub mod classic;
+pub mod npr;
 pub mod film;
 pub mod image_io;
 pub mod part;
 pub mod path;
 mod renderer;
 
+pub use aov::AovLayers;
 pub use film::{Film, Image};
 pub use renderer::{
-    render, render_part, render_part_until, render_until, FilmOutput, RenderOptions, RenderOutput, RenderStats,
-    SampleRange, PASS_SPP,
+    render, render_part, render_part_until, render_until, FilmOutput, RenderOptions, RenderOutput,
+    RenderStats, SampleRange, PASS_SPP,
 };

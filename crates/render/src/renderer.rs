@@ -10,9 +10,13 @@
 //! whatever the range, so a piece whose ends are multiples of it groups its samples exactly
 //! as the whole render does.
 
+use crate::aov::{AovFilm, AovIntegrator, AovLayers};
+use crate::classic::ClassicIntegrator;
+use crate::npr::NprIntegrator;
 use crate::film::{Film, Filter, Image};
 use crate::path::{layout, PathIntegrator, PathStats};
 use glam::{UVec2, Vec2};
+use radia_math::{Ray, Spectrum};
 use radia_sampling::{with_sampler, AnySampler, PixelKey, SampleStream, Sampler, SamplerKind};
 use radia_scene::Scene;
 use rayon::prelude::*;
@@ -53,6 +57,8 @@ pub struct RenderStats {
 
 pub struct RenderOutput {
     pub image: Image,
+    /// The AOV layers, when the scene's integrator is `aov` (or `--aov` wrapped it).
+    pub aovs: Option<AovLayers>,
     pub stats: RenderStats,
 }
 
@@ -103,13 +109,16 @@ impl std::fmt::Display for SampleRange {
 /// The accumulated film of a render of some sample range, before it is developed.
 pub struct FilmOutput {
     pub film: Film,
+    /// The AOV channels' film, when the scene asks for AOVs.
+    pub aovs: Option<AovFilm>,
     pub stats: RenderStats,
     /// The samples actually rendered: the range asked for, or a prefix of it if interrupted.
     pub rendered: SampleRange,
 }
 
-struct TileResult {
+struct TileResult<T> {
     film: Film,
+    extras: T,
     stats: PathStats,
     invalid: u64,
 }
@@ -139,8 +148,14 @@ pub fn render_until(
     // Every sample the sampler has (render_part clamps the range to its count).
     let all = SampleRange::new(0, u32::MAX);
     let out = render_part_until(scene, options, all, deadline, cancel, progress);
+    let image = out.film.develop();
+    let aovs = match (&scene.integrator.aov, &out.aovs) {
+        (Some(desc), Some(film)) => Some(AovLayers::new(desc, film, &image)),
+        _ => None,
+    };
     RenderOutput {
-        image: out.film.develop(),
+        image,
+        aovs,
         stats: out.stats,
     }
 }
@@ -170,28 +185,156 @@ pub fn render_part_until(
     let sampler = AnySampler::new(options.sampler, options.spp);
     let end = samples.end.min(sampler.sample_count());
     let samples = SampleRange::new(samples.start.min(end), end);
-    with_sampler!(&sampler, s => {
-        render_with(scene, s, options.seed, samples, deadline, cancel, progress)
-    })
+    macro_rules! go {
+        ($integrator:expr, $extras:expr) => {
+            with_sampler!(&sampler, s => {
+                render_with(scene, s, $integrator, $extras, options.seed, samples, deadline, cancel, progress)
+            })
+        };
+    }
+    let path = PathIntegrator::new(scene);
+    let classic = scene.integrator.classic.as_ref().map(|d| ClassicIntegrator::new(scene, d));
+    let npr = scene.integrator.npr.as_ref().map(|d| NprIntegrator::new(scene, d));
+    match (&scene.integrator.aov, &classic, &npr) {
+        (None, Some(c), _) => go!(c, &NoExtras).0,
+        (None, None, Some(n)) => go!(n, &NoExtras).0,
+        (None, None, None) => go!(&path, &NoExtras).0,
+        (Some(desc), classic, npr) => {
+            let aov = AovIntegrator::new(scene, desc);
+            let (mut out, film) = match (classic, npr) {
+                (Some(c), _) => go!(c, &aov),
+                (None, Some(n)) => go!(n, &aov),
+                (None, None) => go!(&path, &aov),
+            };
+            out.aovs = Some(film.0);
+            out
+        }
+    }
+}
+
+/// The radiance estimate of one camera ray: the path tracer or another integrator, chosen
+/// once per render so that each compiles into its own tile loop.
+trait Integrator: Sync {
+    /// `pos` is the sample's film position in pixels (the NPR integrator traces its
+    /// neighbours' rays from it).
+    fn li<S: Sampler>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        pos: Vec2,
+        sampler: &mut SampleStream<'_, S>,
+        stats: &mut PathStats,
+    ) -> Spectrum;
+}
+
+impl Integrator for PathIntegrator {
+    #[inline(always)]
+    fn li<S: Sampler>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        _pos: Vec2,
+        sampler: &mut SampleStream<'_, S>,
+        stats: &mut PathStats,
+    ) -> Spectrum {
+        PathIntegrator::li(self, scene, ray, sampler, stats)
+    }
+}
+
+impl Integrator for ClassicIntegrator<'_> {
+    fn li<S: Sampler>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        _pos: Vec2,
+        sampler: &mut SampleStream<'_, S>,
+        stats: &mut PathStats,
+    ) -> Spectrum {
+        ClassicIntegrator::li(self, scene, ray, sampler, stats)
+    }
+}
+
+impl Integrator for NprIntegrator<'_> {
+    fn li<S: Sampler>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        pos: Vec2,
+        _sampler: &mut SampleStream<'_, S>,
+        stats: &mut PathStats,
+    ) -> Spectrum {
+        NprIntegrator::li(self, scene, ray, pos, stats)
+    }
+}
+
+/// What a render records per sample beside the image. The tile loop is generic over it, so
+/// that a render without AOVs ([`NoExtras`]) compiles to the loop it had before they existed.
+trait Extras: Sync {
+    /// A tile's accumulation.
+    type Film: Send;
+    fn film(&self, x0: i32, y0: i32, w: u32, h: u32, filter: Filter) -> Self::Film;
+    /// False when the image is not rendered (an `aov` integrator with no nested one).
+    fn beauty(&self) -> bool;
+    fn add(&self, scene: &Scene, film: &mut Self::Film, pos: Vec2, ray: &Ray);
+    fn merge(into: &mut Self::Film, tile: &Self::Film);
+}
+
+/// Nothing beside the image.
+struct NoExtras;
+
+impl Extras for NoExtras {
+    type Film = ();
+    #[inline(always)]
+    fn film(&self, _: i32, _: i32, _: u32, _: u32, _: Filter) {}
+    #[inline(always)]
+    fn beauty(&self) -> bool {
+        true
+    }
+    #[inline(always)]
+    fn add(&self, _: &Scene, _: &mut (), _: Vec2, _: &Ray) {}
+    #[inline(always)]
+    fn merge(_: &mut (), _: &()) {}
+}
+
+impl Extras for AovIntegrator<'_> {
+    /// The tile's AOV film and a buffer for one sample's values.
+    type Film = (AovFilm, Vec<f32>);
+    fn film(&self, x0: i32, y0: i32, w: u32, h: u32, filter: Filter) -> Self::Film {
+        let n = self.channels();
+        (AovFilm::new(x0, y0, w, h, n, filter), vec![0.0; n])
+    }
+    fn beauty(&self) -> bool {
+        self.has_beauty()
+    }
+    fn add(&self, scene: &Scene, (film, values): &mut Self::Film, pos: Vec2, ray: &Ray) {
+        self.sample(scene, ray, values);
+        film.add_sample(pos, values);
+    }
+    fn merge(into: &mut Self::Film, tile: &Self::Film) {
+        into.0.merge(&tile.0);
+    }
 }
 
 /// [`render`] with a concrete sampler, so that its calls inline into the path loop.
-fn render_with<S: Sampler>(
+#[allow(clippy::too_many_arguments)]
+fn render_with<S: Sampler, I: Integrator, E: Extras>(
     scene: &Scene,
     sampler: &S,
+    integrator: &I,
+    extras: &E,
     seed: u64,
     samples: SampleRange,
     deadline: Option<Instant>,
     cancel: &AtomicBool,
     progress: &(dyn Fn(u64) + Sync),
-) -> FilmOutput {
+) -> (FilmOutput, E::Film) {
     let start = Instant::now();
     let mut passes = 0u32;
     let (w, h) = (scene.film.width, scene.film.height);
     let filter = Filter::new(scene.film.filter);
     let margin = (filter.radius() - 0.5).ceil().max(0.0) as i32;
-    let integrator = PathIntegrator::new(scene);
     let mut film = Film::new(0, 0, w, h, filter);
+    let mut extras_film = extras.film(0, 0, w, h, filter);
     let mut stats = RenderStats::default();
 
     let tile = tile_size(w, h);
@@ -210,20 +353,17 @@ fn render_with<S: Sampler>(
         }
         // Passes are aligned to multiples of PASS_SPP (see the module comment).
         let spp_end = ((spp_start / PASS_SPP + 1) * PASS_SPP).min(samples.end);
-        let results: Vec<Option<TileResult>> = tiles
+        let results: Vec<Option<TileResult<E::Film>>> = tiles
             .par_iter()
             .map(|&(x0, y0)| {
                 if cancel.load(Ordering::Relaxed) {
                     return None;
                 }
                 let (tw, th) = (tile.min(w - x0), tile.min(h - y0));
-                let mut tile_film = Film::new(
-                    x0 as i32 - margin,
-                    y0 as i32 - margin,
-                    tw + 2 * margin as u32,
-                    th + 2 * margin as u32,
-                    filter,
-                );
+                let (fx, fy) = (x0 as i32 - margin, y0 as i32 - margin);
+                let (fw, fh) = (tw + 2 * margin as u32, th + 2 * margin as u32);
+                let mut tile_film = Film::new(fx, fy, fw, fh, filter);
+                let mut tile_extras = extras.film(fx, fy, fw, fh, filter);
                 let mut pstats = PathStats::default();
                 let mut invalid = 0;
                 for y in y0..y0 + th {
@@ -235,7 +375,12 @@ fn render_with<S: Sampler>(
                             let pos = Vec2::new(x as f32, y as f32) + stream.next_2d();
                             let film_pos = pos / Vec2::new(w as f32, h as f32);
                             let ray = scene.camera.generate_ray(film_pos);
-                            let l = integrator.li(scene, ray, &mut stream, &mut pstats);
+                            extras.add(scene, &mut tile_extras, pos, &ray);
+                            let l = if extras.beauty() {
+                                integrator.li(scene, ray, pos, &mut stream, &mut pstats)
+                            } else {
+                                Spectrum::ZERO
+                            };
                             if l.is_finite() {
                                 tile_film.add_sample(pos, l);
                             } else {
@@ -251,6 +396,7 @@ fn render_with<S: Sampler>(
                 progress(done.fetch_add(n, Ordering::Relaxed) + n);
                 Some(TileResult {
                     film: tile_film,
+                    extras: tile_extras,
                     stats: pstats,
                     invalid,
                 })
@@ -261,6 +407,7 @@ fn render_with<S: Sampler>(
         }
         for r in results.into_iter().flatten() {
             film.merge(&r.film);
+            E::merge(&mut extras_film, &r.extras);
             stats.rays += r.stats.rays;
             stats.invalid_samples += r.invalid;
         }
@@ -269,9 +416,11 @@ fn render_with<S: Sampler>(
         spp_start = spp_end;
         passes += 1;
     }
-    FilmOutput {
+    let out = FilmOutput {
         film,
+        aovs: None,
         stats,
         rendered: SampleRange::new(samples.start, spp_start),
-    }
+    };
+    (out, extras_film)
 }

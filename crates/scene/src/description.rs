@@ -6,6 +6,8 @@ use radia_bsdf::{Bsdf, Texture};
 use radia_math::Spectrum;
 use radia_sampling::SamplerKind;
 
+pub use crate::aov::{parse_aovs, AovDesc, AovKind, AovOutput};
+
 /// Mitsuba's `path` integrator parameters (`src/integrators/path.cpp`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct IntegratorDesc {
@@ -15,6 +17,61 @@ pub struct IntegratorDesc {
     pub rr_depth: i32,
     /// Camera rays see through area emitters and escaped primary rays give 0.
     pub hide_emitters: bool,
+    /// Mitsuba's `aov` integrator around the one above: the outputs written beside the image.
+    pub aov: Option<AovDesc>,
+    /// radia's `classic` integrator instead of the path tracer (`max_depth` then bounds the
+    /// Whitted recursion).
+    pub classic: Option<ClassicDesc>,
+    /// radia's `npr` integrator instead of the path tracer.
+    pub npr: Option<NprDesc>,
+}
+
+/// How the `npr` integrator fills surfaces.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum NprStyle {
+    /// Lambert's cos θ quantised to `levels` bands.
+    Toon { levels: u32 },
+    /// Gooch et al. 1998: k_cool = (0, 0, b) + α·kd, k_warm = (y, y, 0) + β·kd, blended by
+    /// (1 + l·n)/2.
+    Gooch { b: f32, y: f32, alpha: f32, beta: f32 },
+}
+
+/// radia's `npr` integrator (see `radia_render::npr`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NprDesc {
+    pub style: NprStyle,
+    /// Line width in pixels (0: no lines).
+    pub line_width: f32,
+    pub line_color: Spectrum,
+    /// Neighbouring normals further apart than this (degrees) make a crease line.
+    pub crease_angle: f32,
+    /// A neighbour farther off the tangent plane than this fraction of the distance makes
+    /// a silhouette line.
+    pub depth_threshold: f32,
+}
+
+/// How the `classic` integrator shades a triangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ClassicShading {
+    /// One evaluation per triangle: at its centroid with its face normal.
+    Flat,
+    /// Lighting evaluated at the three vertices (vertex normals) and interpolated.
+    Gouraud,
+    /// Normals interpolated, lighting evaluated at every hit.
+    Phong,
+}
+
+/// radia's `classic` integrator: textbook local illumination (see `radia_render::classic`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClassicDesc {
+    /// Ambient radiance, multiplied by the material's diffuse reflectance.
+    pub ambient: Spectrum,
+    /// (a, b, c) of the attenuation 1/(a + b·d + c·d²) of point and spot lights; (0, 0, 1)
+    /// is the inverse-square law.
+    pub attenuation: [f32; 3],
+    pub shading: ClassicShading,
+    /// Shadow rays (hard shadows) on or off.
+    pub shadows: bool,
 }
 
 impl Default for IntegratorDesc {
@@ -23,6 +80,9 @@ impl Default for IntegratorDesc {
             max_depth: -1,
             rr_depth: 5,
             hide_emitters: false,
+            aov: None,
+            classic: None,
+            npr: None,
         }
     }
 }

@@ -2,6 +2,7 @@
 //! (Mitsuba 3 XML, PLY and OBJ meshes).
 
 pub mod accel;
+mod aov;
 pub mod camera;
 pub mod description;
 pub mod emitter;

@@ -10,7 +10,8 @@ use super::transform;
 use super::xml::{Doc, Kind};
 use super::LoadError;
 use crate::{
-    CameraDesc, EmitterDesc, FilmDesc, FilterDesc, IntegratorDesc, SamplerDesc, SceneDescription,
+    parse_aovs, AovDesc, CameraDesc, ClassicDesc, ClassicShading, NprDesc, NprStyle, EmitterDesc, FilmDesc, FilterDesc, IntegratorDesc,
+    SamplerDesc, SceneDescription,
 };
 use glam::Affine3A;
 use radia_bsdf::{Bsdf, Texture};
@@ -122,12 +123,22 @@ pub(crate) fn build_scene(doc: &Doc) -> Result<(SceneDescription, Vec<String>), 
     Ok((desc, b.warnings))
 }
 
-/// `path` (`src/integrators/path.cpp` and `MonteCarloIntegrator` in `src/render/integrator.cpp`).
+/// `path` (`src/integrators/path.cpp` and `MonteCarloIntegrator` in `src/render/integrator.cpp`),
+/// or `aov` (`src/integrators/aov.cpp`) around it.
 fn build_integrator(b: &Builder<'_>, idx: usize) -> Result<IntegratorDesc, LoadError> {
     let mut p = Props::new(b.doc, idx);
+    if p.node.plugin == "aov" {
+        return build_aov_integrator(b, p);
+    }
+    if p.node.plugin == "classic" {
+        return build_classic_integrator(p);
+    }
+    if p.node.plugin == "npr" {
+        return build_npr_integrator(p);
+    }
     if p.node.plugin != "path" {
         return Err(p.err(format!(
-            "unsupported integrator plugin type \"{}\" (radia supports: path)",
+            "unsupported integrator plugin type \"{}\" (radia supports: path, aov, classic, npr)",
             p.node.plugin
         )));
     }
@@ -151,7 +162,145 @@ fn build_integrator(b: &Builder<'_>, idx: usize) -> Result<IntegratorDesc, LoadE
         max_depth: max_depth as i32,
         rr_depth: rr_depth as i32,
         hide_emitters,
+        aov: None,
+        classic: None,
+        npr: None,
     })
+}
+
+/// radia's `classic` integrator (`radia_render::classic`): `ambient` (rgb, default 0),
+/// `attenuation` ("a, b, c", default "0, 0, 1"), `shading` (flat, gouraud, phong; default
+/// phong), `shadows` (default true), `max_depth` (Whitted recursion, default 5).
+fn build_classic_integrator(mut p: Props<'_>) -> Result<IntegratorDesc, LoadError> {
+    let ambient = p.color("ambient", 0.0, false)?;
+    let attenuation = match p.string_opt("attenuation")? {
+        None => [0.0, 0.0, 1.0],
+        Some(text) => {
+            let v: Vec<f32> = text
+                .split(',')
+                .map(|t| t.trim().parse::<f32>())
+                .collect::<Result<_, _>>()
+                .map_err(|_| p.err_at(p.pos_of("attenuation"), format!("\"attenuation\" must be three numbers a, b, c, got \"{text}\"")))?;
+            let ok = v.len() == 3 && v.iter().all(|x| x.is_finite() && *x >= 0.0) && v.iter().any(|x| *x > 0.0);
+            if !ok {
+                return Err(p.err_at(
+                    p.pos_of("attenuation"),
+                    format!("\"attenuation\" must be three non-negative numbers a, b, c, not all 0, got \"{text}\""),
+                ));
+            }
+            [v[0], v[1], v[2]]
+        }
+    };
+    let shading = match p.string_opt("shading")?.unwrap_or("phong") {
+        "flat" => ClassicShading::Flat,
+        "gouraud" => ClassicShading::Gouraud,
+        "phong" => ClassicShading::Phong,
+        other => {
+            return Err(p.err_at(
+                p.pos_of("shading"),
+                format!("unknown shading \"{other}\" (use flat, gouraud or phong)"),
+            ))
+        }
+    };
+    let shadows = p.boolean("shadows", true)?;
+    let max_depth = p.int("max_depth", 5, 1, 64)?;
+    p.finish()?;
+    let c = |v: f64| v as f32;
+    Ok(IntegratorDesc {
+        max_depth: max_depth as i32,
+        classic: Some(ClassicDesc {
+            ambient: radia_math::Spectrum::new(c(ambient.x), c(ambient.y), c(ambient.z)),
+            attenuation,
+            shading,
+            shadows,
+        }),
+        ..IntegratorDesc::default()
+    })
+}
+
+/// radia's `npr` integrator (`radia_render::npr`): `style` toon (`levels`, default 4) or
+/// gooch (`b` 0.4, `y` 0.4, `alpha` 0.2, `beta` 0.6, Gooch et al. 1998's values);
+/// `line_width` (pixels, default 1), `line_color` (default black), `crease_angle`
+/// (degrees, default 60), `depth_threshold` (default 0.05).
+fn build_npr_integrator(mut p: Props<'_>) -> Result<IntegratorDesc, LoadError> {
+    let style = match p.string_opt("style")?.unwrap_or("toon") {
+        "toon" => NprStyle::Toon {
+            levels: p.int("levels", 4, 1, 256)? as u32,
+        },
+        "gooch" => NprStyle::Gooch {
+            b: p.float("b", 0.4)? as f32,
+            y: p.float("y", 0.4)? as f32,
+            alpha: p.float("alpha", 0.2)? as f32,
+            beta: p.float("beta", 0.6)? as f32,
+        },
+        other => {
+            return Err(p.err_at(
+                p.pos_of("style"),
+                format!("unknown style \"{other}\" (use toon or gooch)"),
+            ))
+        }
+    };
+    let line_width = p.float("line_width", 1.0)?;
+    if !(0.0..=64.0).contains(&line_width) {
+        return Err(p.err_at(p.pos_of("line_width"), format!("\"line_width\" must be in [0, 64] pixels, got {line_width}")));
+    }
+    let lc = p.color("line_color", 0.0, false)?;
+    let crease_angle = p.float("crease_angle", 60.0)?;
+    let depth_threshold = p.float("depth_threshold", 0.05)?;
+    let threshold_ok = depth_threshold > 0.0; // false for NaN too
+    if !threshold_ok || !(0.0..=180.0).contains(&crease_angle) {
+        return Err(p.err("\"depth_threshold\" must be > 0 and \"crease_angle\" in [0, 180] degrees"));
+    }
+    p.finish()?;
+    Ok(IntegratorDesc {
+        npr: Some(NprDesc {
+            style,
+            line_width: line_width as f32,
+            line_color: radia_math::Spectrum::new(lc.x as f32, lc.y as f32, lc.z as f32),
+            crease_angle: crease_angle as f32,
+            depth_threshold: depth_threshold as f32,
+        }),
+        ..IntegratorDesc::default()
+    })
+}
+
+/// Mitsuba's `aov` integrator: the `aovs` string and at most one nested integrator, whose
+/// name (`_arg_0` when unnamed, as Mitsuba names it) becomes the beauty layer. Mitsuba takes
+/// several nested integrators; radia renders one image per run and refuses more.
+fn build_aov_integrator(b: &Builder<'_>, mut p: Props<'_>) -> Result<IntegratorDesc, LoadError> {
+    let Some(spec) = p.string_opt("aovs")? else {
+        return Err(p.err("the aov integrator needs the string parameter \"aovs\""));
+    };
+    let outputs = parse_aovs(spec).map_err(|e| p.err_at(p.pos_of("aovs"), e))?;
+    let mut nested: Option<(String, IntegratorDesc)> = None;
+    for (i, n, kind) in p.objects() {
+        if kind != Kind::Integrator {
+            continue;
+        }
+        p.take(i);
+        if nested.is_some() {
+            return Err(p.err_at(
+                p.prop_pos(i),
+                "radia's aov integrator takes one nested integrator (Mitsuba's takes several)",
+            ));
+        }
+        if b.doc.nodes[n].plugin == "aov" {
+            return Err(p.err_at(p.prop_pos(i), "an aov integrator cannot nest another one"));
+        }
+        let name = p.node.props[i].name.clone();
+        nested = Some((name, build_integrator(b, n)?));
+    }
+    p.finish()?;
+    let (beauty_layer, mut desc) = match nested {
+        Some((name, desc)) => (Some(name), desc),
+        None => (None, IntegratorDesc::default()),
+    };
+    desc.aov = Some(AovDesc {
+        outputs,
+        has_beauty: beauty_layer.is_some(),
+        beauty_layer,
+    });
+    Ok(desc)
 }
 
 /// Mitsuba's `parse_fov` (`src/render/sensor.cpp`): the horizontal field of view in degrees

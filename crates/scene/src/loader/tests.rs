@@ -488,7 +488,10 @@ fn loader_film_sampler_integrator() {
         IntegratorDesc {
             max_depth: 8,
             rr_depth: 3,
-            hide_emitters: true
+            hide_emitters: true,
+            aov: None,
+            classic: None,
+            npr: None,
         }
     );
     assert_eq!(
@@ -553,6 +556,110 @@ fn loader_film_sampler_integrator() {
         ),
         "only one integrator",
     );
+}
+
+#[test]
+fn loader_aov_integrator() {
+    use crate::{AovDesc, AovKind, AovOutput};
+    let s = load_ok(
+        "aov",
+        r#"<integrator type="aov"><string name="aovs" value="dd.y:depth,nn:sh_normal"/>
+             <integrator type="path" name="my_image"><integer name="max_depth" value="4"/></integrator>
+           </integrator>"#,
+    );
+    assert_eq!(
+        s.integrator.max_depth, 4,
+        "the nested path integrator's parameters"
+    );
+    assert_eq!(
+        s.integrator.aov,
+        Some(AovDesc {
+            outputs: vec![
+                AovOutput {
+                    name: "dd.y".into(),
+                    kind: AovKind::Depth
+                },
+                AovOutput {
+                    name: "nn".into(),
+                    kind: AovKind::ShNormal
+                },
+            ],
+            beauty_layer: Some("my_image".into()),
+            has_beauty: true,
+        })
+    );
+    // Unnamed nested objects are called _arg_N, as Mitsuba names them.
+    let s = load_ok(
+        "aov-unnamed",
+        r#"<integrator type="aov"><string name="aovs" value="a:albedo"/><integrator type="path"/></integrator>"#,
+    );
+    assert_eq!(
+        s.integrator.aov.unwrap().beauty_layer.as_deref(),
+        Some("_arg_0")
+    );
+    let s = load_ok(
+        "aov-alone",
+        r#"<integrator type="aov"><string name="aovs" value="a:albedo"/></integrator>"#,
+    );
+    assert!(!s.integrator.aov.unwrap().has_beauty);
+    for (name, body, needle) in [
+        (
+            "aov-missing",
+            r#"<integrator type="aov"/>"#,
+            "needs the string parameter \"aovs\"",
+        ),
+        (
+            "aov-type",
+            r#"<integrator type="aov"><string name="aovs" value="x:normals"/></integrator>"#,
+            "invalid AOV type \"normals\"",
+        ),
+        (
+            "aov-two",
+            r#"<integrator type="aov"><string name="aovs" value="a:uv"/><integrator type="path"/><integrator type="path"/></integrator>"#,
+            "one nested integrator",
+        ),
+        (
+            "aov-nested-aov",
+            r#"<integrator type="aov"><string name="aovs" value="a:uv"/><integrator type="aov"><string name="aovs" value="b:uv"/></integrator></integrator>"#,
+            "cannot nest another",
+        ),
+        (
+            "aov-unused",
+            r#"<integrator type="aov"><string name="aovs" value="a:uv"/><integer name="max_depth" value="3"/></integrator>"#,
+            "unexpected parameter \"max_depth\"",
+        ),
+    ] {
+        expect_err(load(name, body), needle);
+    }
+}
+
+#[test]
+fn loader_classic_integrator() {
+    use crate::{ClassicDesc, ClassicShading};
+    let s = load_ok(
+        "classic",
+        r#"<integrator type="classic"><rgb name="ambient" value="0.1"/><string name="attenuation" value="1, 0.5, 0"/>
+             <string name="shading" value="gouraud"/><boolean name="shadows" value="false"/><integer name="max_depth" value="3"/></integrator>"#,
+    );
+    assert_eq!(s.integrator.max_depth, 3);
+    assert_eq!(
+        s.integrator.classic,
+        Some(ClassicDesc {
+            ambient: radia_math::Spectrum::splat(0.1),
+            attenuation: [1.0, 0.5, 0.0],
+            shading: ClassicShading::Gouraud,
+            shadows: false,
+        })
+    );
+    for (name, body, needle) in [
+        ("classic-shading", r#"<integrator type="classic"><string name="shading" value="smooth"/></integrator>"#, "unknown shading \"smooth\""),
+        ("classic-att", r#"<integrator type="classic"><string name="attenuation" value="1, 2"/></integrator>"#, "three non-negative numbers"),
+        ("classic-att0", r#"<integrator type="classic"><string name="attenuation" value="0, 0, 0"/></integrator>"#, "not all 0"),
+        ("classic-att-text", r#"<integrator type="classic"><string name="attenuation" value="a, b, c"/></integrator>"#, "must be three numbers"),
+        ("classic-depth", r#"<integrator type="classic"><integer name="max_depth" value="0"/></integrator>"#, "max_depth"),
+    ] {
+        expect_err(load(name, body), needle);
+    }
 }
 
 // ---------------------------------------------------------------------------------------

@@ -1,0 +1,101 @@
+//! The `npr` integrator: toon shading has exactly N bands on a sphere; silhouette lines
+//! appear exactly where the neighbours' depths jump, and nowhere else.
+
+use radia_render::{render, RenderOptions, RenderOutput};
+use radia_sampling::SamplerKind;
+use radia_scene::{load_mitsuba_xml, Scene};
+use std::collections::BTreeSet;
+use std::sync::atomic::AtomicBool;
+
+fn render_xml(name: &str, xml: &str, spp: u32) -> RenderOutput {
+    let dir = std::env::temp_dir().join(format!("radia-npr-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("scene.xml");
+    std::fs::write(&path, xml).unwrap();
+    let scene = Scene::build(load_mitsuba_xml(&path, &[]).unwrap_or_else(|e| panic!("{e}")));
+    let options = RenderOptions {
+        spp,
+        seed: 3,
+        sampler: SamplerKind::Independent,
+    };
+    render(&scene, &options, &AtomicBool::new(false), &|_| {})
+}
+
+fn sensor(origin: &str, target: &str, fov: f32, w: u32, h: u32) -> String {
+    format!(
+        r#"<sensor type="perspective"><float name="fov" value="{fov}"/>
+        <transform name="to_world"><lookat origin="{origin}" target="{target}" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="{w}"/><integer name="height" value="{h}"/>
+            <rfilter type="box"/></film></sensor>"#
+    )
+}
+
+#[test]
+fn toon_has_exactly_n_bands_on_a_sphere() {
+    for levels in [2, 4, 7] {
+        // Lit from the side, so the visible half runs from unlit to fully lit; one sample
+        // per pixel, so every pixel holds one band's value.
+        let xml = format!(
+            r#"<scene version="3.0.0">
+            <integrator type="aov"><string name="aovs" value="s:shape_index"/>
+                <integrator type="npr"><integer name="levels" value="{levels}"/>
+                    <float name="line_width" value="0"/></integrator></integrator>
+            {}
+            <shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="0.8"/></bsdf></shape>
+            <emitter type="directional"><vector name="direction" value="-1, -0.3, 0.2"/></emitter>
+            </scene>"#,
+            sensor("0, 0, -4", "0, 0, 0", 35.0, 64, 64)
+        );
+        let out = render_xml(&format!("toon{levels}"), &xml, 1);
+        let aovs = out.aovs.as_ref().unwrap();
+        let shape = &aovs.planes[aovs.names.iter().position(|n| n == "s.I").unwrap()];
+        let bands: BTreeSet<u32> = out
+            .image
+            .pixels
+            .iter()
+            .zip(shape)
+            .filter(|(_, &s)| s == 1.0)
+            .map(|(p, _)| p.x.to_bits())
+            .collect();
+        assert_eq!(bands.len(), levels as usize, "{levels} levels: {bands:?}");
+    }
+}
+
+#[test]
+fn silhouette_lines_exactly_where_the_depth_jumps() {
+    // A near plane (z = 2) covering world x >= 0, i.e. the image's left half (image x runs
+    // towards -x), its edge projecting exactly onto the boundary between columns 19 and 20,
+    // in front of a far plane (z = 4). Both face the camera and are lit head-on, so the
+    // fill is kd = 0.5 everywhere. With 1-pixel lines, a sample's horizontal neighbours
+    // cross the edge exactly when it is in column 19 or 20.
+    let plane = |sx: f32, tx: f32, z: f32| {
+        format!(
+            r#"<shape type="rectangle"><transform name="to_world"><rotate y="1" angle="180"/>
+            <scale value="{sx}"/><translate x="{tx}" z="{z}"/></transform>
+            <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>"#
+        )
+    };
+    let xml = format!(
+        r#"<scene version="3.0.0">
+        <integrator type="npr"><integer name="levels" value="2"/><float name="line_width" value="1"/>
+            <rgb name="line_color" value="1, 0, 0"/></integrator>
+        {}
+        {}
+        {}
+        <emitter type="directional"><vector name="direction" value="0, 0, 1"/></emitter>
+        </scene>"#,
+        sensor("0, 0, 0", "0, 0, 1", 60.0, 40, 30),
+        plane(10.0, 10.0, 2.0),
+        plane(50.0, 0.0, 4.0)
+    );
+    let out = render_xml("silhouette", &xml, 4);
+    let line = radia_math::Spectrum::new(1.0, 0.0, 0.0);
+    let fill = radia_math::Spectrum::splat(0.5);
+    for y in 0..30 {
+        for x in 0..40 {
+            let p = out.image.get(x, y);
+            let expected = if x == 19 || x == 20 { line } else { fill };
+            assert_eq!(p, expected, "pixel ({x}, {y})");
+        }
+    }
+}
