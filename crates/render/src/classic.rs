@@ -205,7 +205,7 @@ impl<'a> ClassicIntegrator<'a> {
             }
             if self.desc.shadows {
                 let shadow = if es.dist.is_finite() {
-                    si.spawn_ray_to(es.p)
+                    si.spawn_ray_to_surface(es.p, es.n, es.p_error)
                 } else {
                     si.spawn_ray_towards_infinity(es.d)
                 };
