@@ -4,10 +4,11 @@
 mod wide;
 
 use crate::shape::{Shape, ShapeKind};
-use glam::{Vec2, Vec3};
+use glam::{UVec2, Vec2, Vec3};
 use obvhs::{aabb::Aabb, cwbvh::CwBvh, Boundable, BvhBuildParams};
 use radia_math::Ray;
 use rayon::prelude::*;
+use std::mem::MaybeUninit;
 use std::time::Duration;
 
 /// One primitive in BVH order: a triangle with its vertices inline (one cache line), or a
@@ -43,10 +44,18 @@ impl Primitive {
 struct Bounded(Aabb);
 
 impl Boundable for Bounded {
+    /// The box, clamped to ±[`MAX_BUILD_COORDINATE`]: the builder's surface areas of boxes
+    /// beyond it overflow f32 (found by fuzzing: a glTF with coordinates near 10³⁸ broke the
+    /// CWBVH builder's decisions). The clamped box still holds every part of the primitive
+    /// a ray within that range can reach.
     fn aabb(&self) -> Aabb {
-        self.0
+        let lim = glam::Vec3A::splat(MAX_BUILD_COORDINATE);
+        Aabb::new(self.0.min.clamp(-lim, lim), self.0.max.clamp(-lim, lim))
     }
 }
+
+/// Largest coordinate the BVH builder sees: (2·10¹⁸)² · 6 stays below f32::MAX.
+const MAX_BUILD_COORDINATE: f32 = 1e18;
 
 /// The closest hit found by [`Accel::intersect`].
 #[derive(Clone, Copy, Debug)]
@@ -206,6 +215,8 @@ pub struct Accel {
     /// Bit i set when primitive i is analytic (tested one at a time); `None` when there are
     /// none.
     analytic: Option<Vec<u64>>,
+    /// Levels of the BVH: traversal needs a stack entry per level.
+    depth: usize,
 }
 
 impl Accel {
@@ -229,6 +240,7 @@ impl Accel {
                 primitives: Vec::new(),
                 lanes: wide::TriangleLanes::new(std::iter::empty()),
                 analytic: None,
+                depth: 0,
             };
         }
         let mut bounds = Vec::with_capacity(total);
@@ -262,10 +274,10 @@ impl Accel {
             BvhBuildParams::medium_build(),
             &mut Duration::default(),
         );
-        assert!(
-            wide::max_depth(&bvh) < wide::STACK_SIZE,
-            "BVH deeper than the traversal stack"
-        );
+        // Real scenes stay far below STACK_SIZE levels; pathological geometry (found by
+        // fuzzing: coordinates spread over many orders of magnitude) can go deeper, and is
+        // then traversed with a stack on the heap (`with_stack`).
+        let depth = wide::max_depth(&bvh);
         drop(bounds);
         let primitive = |i: usize| {
             let si = first.partition_point(|&f| f <= i) - 1;
@@ -313,6 +325,20 @@ impl Accel {
             primitives,
             lanes,
             analytic,
+            depth,
+        }
+    }
+
+    /// Runs `f` with a traversal stack deep enough for this BVH: on the call stack for every
+    /// BVH of fewer than [`wide::STACK_SIZE`] levels, on the heap for deeper ones.
+    #[inline(always)]
+    fn with_stack<R>(&self, f: impl FnOnce(&mut [MaybeUninit<UVec2>]) -> R) -> R {
+        if self.depth < wide::STACK_SIZE {
+            let mut stack = [MaybeUninit::uninit(); wide::STACK_SIZE];
+            f(&mut stack)
+        } else {
+            let mut stack = vec![MaybeUninit::uninit(); self.depth + 1];
+            f(&mut stack)
         }
     }
 
@@ -420,15 +446,18 @@ impl Accel {
         let wray = WatertightRay::new(ray);
         let node_ray = wide::NodeRay::new(ray.o, ray.d, ray.t_max);
         let mut bary = Vec2::ZERO;
-        let (prim, t) = wide::traverse(
-            &self.bvh,
-            &node_ray,
-            ray.t_max,
-            false,
-            |base, mask, t_max| {
-                self.intersect_leaves(shapes, &wray, ray, base, mask, t_max, false, &mut bary)
-            },
-        )?;
+        let (prim, t) = self.with_stack(|stack| {
+            wide::traverse(
+                &self.bvh,
+                &node_ray,
+                ray.t_max,
+                false,
+                |base, mask, t_max| {
+                    self.intersect_leaves(shapes, &wray, ray, base, mask, t_max, false, &mut bary)
+                },
+                stack,
+            )
+        })?;
         Some(Hit { t, prim, bary })
     }
 
@@ -441,15 +470,18 @@ impl Accel {
         let wray = WatertightRay::new(ray);
         let node_ray = wide::NodeRay::new(ray.o, ray.d, ray.t_max);
         let mut bary = Vec2::ZERO;
-        wide::traverse(
-            &self.bvh,
-            &node_ray,
-            ray.t_max,
-            true,
-            |base, mask, t_max| {
-                self.intersect_leaves(shapes, &wray, ray, base, mask, t_max, true, &mut bary)
-            },
-        )
+        self.with_stack(|stack| {
+            wide::traverse(
+                &self.bvh,
+                &node_ray,
+                ray.t_max,
+                true,
+                |base, mask, t_max| {
+                    self.intersect_leaves(shapes, &wray, ray, base, mask, t_max, true, &mut bary)
+                },
+                stack,
+            )
+        })
         .is_some()
     }
 

@@ -248,7 +248,7 @@ mod avx2 {
 /// (bit i of `mask` is primitive `base + i`, at most 24, in the BVH's primitive order); it
 /// returns the closest of them hit before `t_max` (with `any_hit`, any of them). With
 /// `any_hit` traversal stops at the first hit. Returns the closest (or first) hit's primitive
-/// and distance.
+/// and distance. `stack` must have more entries than `bvh` has levels ([`max_depth`]).
 #[inline(always)]
 pub fn traverse<F>(
     bvh: &CwBvh,
@@ -256,6 +256,7 @@ pub fn traverse<F>(
     t_max: f32,
     any_hit: bool,
     mut leaves: F,
+    stack: &mut [std::mem::MaybeUninit<UVec2>],
 ) -> Option<(u32, f32)>
 where
     F: FnMut(u32, u32, f32) -> Option<(u32, f32)>,
@@ -265,7 +266,6 @@ where
     }
     let mut t_max = t_max;
     let mut best = None;
-    let mut stack = std::mem::MaybeUninit::<[UVec2; STACK_SIZE]>::uninit();
     let stack = stack.as_mut_ptr() as *mut UVec2;
     let mut sp = 0usize;
     // (child base index, hit bits in the high byte | imask); the root is inner child 0.
@@ -276,8 +276,8 @@ where
         let offset = 31 - hits.leading_zeros();
         node_group.y &= !(1u32 << offset);
         if node_group.y & 0xff00_0000 != 0 {
-            // SAFETY: sp < STACK_SIZE: a stack entry per level at most, and the BVH's depth
-            // was checked against STACK_SIZE when it was built (`max_depth`).
+            // SAFETY: sp < stack.len(): a stack entry per level at most, and the caller's
+            // stack has more entries than the BVH has levels.
             unsafe { stack.add(sp).write(node_group) };
             sp += 1;
         }
