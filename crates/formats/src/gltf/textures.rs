@@ -71,6 +71,24 @@ impl<'f> Images<'f> {
             Some(n) => format!("image {} (\"{n}\")", image.index()),
             None => format!("image {}", image.index()),
         };
+        // `gltf::Image::source` unwraps what the specification requires but the crate's
+        // validation does not check (found by `cargo fuzz run gltf`): a bufferView image's
+        // mimeType, a valid view index, or else a uri. Refuse those files first.
+        let json = &self.file.doc.as_json().images[image.index()];
+        match (&json.buffer_view, &json.uri) {
+            (Some(view), _) => {
+                if json.mime_type.is_none() {
+                    return Err(format!(
+                        "{what} is stored in a bufferView but has no mimeType"
+                    ));
+                }
+                if view.value() >= self.file.doc.views().len() {
+                    return Err(format!("{what} refers to a missing bufferView"));
+                }
+            }
+            (None, None) => return Err(format!("{what} has neither a bufferView nor a uri")),
+            (None, Some(_)) => {}
+        }
         let bytes: Vec<u8> = match image.source() {
             gltf::image::Source::View { view, .. } => {
                 let buffer = &self.file.buffers[view.buffer().index()];
