@@ -142,21 +142,36 @@ pub fn offset_origin(p: Vec3, p_error: Vec3, n: Vec3, d: Vec3) -> Vec3 {
     let dist = n.abs().dot(p_error);
     let offset = if n.dot(d) >= 0.0 { n * dist } else { -n * dist };
     let po = p + offset;
-    // Round away from p, so that the rounding of the addition cannot undo the offset.
-    let away = |x: f32, o: f32| {
-        if o > 0.0 {
-            x.next_up()
-        } else if o < 0.0 {
-            x.next_down()
-        } else {
-            x
-        }
+    // Round away from p, so that the rounding of the addition cannot undo the offset. (Four
+    // lanes written as one loop, which the compiler turns into one SSE select chain.)
+    let (x, o) = (po.extend(0.0).to_array(), offset.extend(0.0).to_array());
+    let mut out = [0.0f32; 4];
+    for i in 0..4 {
+        out[i] = step_away(x[i], o[i]);
+    }
+    Vec3::new(out[0], out[1], out[2])
+}
+
+/// The next float after `x` in the direction of `o`'s sign (`x` itself when `o` is zero or
+/// `x` is not finite): `f32::next_up` or `next_down`, written with selects instead of
+/// branches, as this runs twice per bounce.
+#[inline(always)]
+fn step_away(x: f32, o: f32) -> f32 {
+    let (bits, sign) = (x.to_bits(), o.to_bits() & 0x8000_0000);
+    // Away from zero when x and o have the same sign, towards it otherwise; from ±0 to the
+    // smallest subnormal of o's sign.
+    let stepped = if x == 0.0 {
+        sign | 1
+    } else if (bits & 0x8000_0000) == sign {
+        bits + 1
+    } else {
+        bits - 1
     };
-    Vec3::new(
-        away(po.x, offset.x),
-        away(po.y, offset.y),
-        away(po.z, offset.z),
-    )
+    if o == 0.0 || !x.is_finite() {
+        x
+    } else {
+        f32::from_bits(stepped)
+    }
 }
 
 impl SurfaceInteraction {
@@ -215,4 +230,41 @@ fn shadow_ray(o: Vec3, target: Vec3) -> Ray {
     let delta = target - o;
     let dist = delta.length();
     Ray::new(o, delta / dist, dist * (1.0 - SHADOW_EPSILON))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::step_away;
+
+    #[test]
+    fn step_away_is_next_up_or_next_down() {
+        let xs = [
+            0.0f32,
+            -0.0,
+            1.0,
+            -1.0,
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+            f32::from_bits(1),
+            -f32::from_bits(1),
+            f32::MAX,
+            f32::MIN,
+            1e5,
+            -3.7e-20,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ];
+        for &x in &xs {
+            for o in [1e-3f32, -1e-3, 0.0, -0.0] {
+                let want = if o > 0.0 && x.is_finite() {
+                    x.next_up()
+                } else if o < 0.0 && x.is_finite() {
+                    x.next_down()
+                } else {
+                    x
+                };
+                assert_eq!(step_away(x, o).to_bits(), want.to_bits(), "x {x:e}, o {o:e}");
+            }
+        }
+    }
 }

@@ -62,11 +62,24 @@ pub trait Sampler: Sync + Send {
     fn get_1d(&self, key: PixelKey, index: u32, dim: u32) -> f32;
     /// Values `dim` and `dim + 1`, stratified together.
     fn get_2d(&self, key: PixelKey, index: u32, dim: u32) -> Vec2;
+    /// What every block of one sample shares, made once per sample by [`SampleStream`] and
+    /// handed to [`Sampler::get_block`] (Sobol: the sample's shuffled index and its seed).
+    #[inline(always)]
+    fn prepare(&self, _key: PixelKey, _index: u32) -> u64 {
+        0
+    }
     /// Values `4 block .. 4 block + 4` at once, for samplers that make them together (one
     /// Sobol set): [`SampleStream`] then keeps the block instead of making it again for each
     /// of its values. `None` (the default) for samplers that make each request on its own.
+    /// `prepared` is this sample's [`Sampler::prepare`].
     #[inline(always)]
-    fn get_block(&self, _key: PixelKey, _index: u32, _block: u32) -> Option<[f32; 4]> {
+    fn get_block(
+        &self,
+        _key: PixelKey,
+        _index: u32,
+        _block: u32,
+        _prepared: u64,
+    ) -> Option<[f32; 4]> {
         None
     }
 }
@@ -77,6 +90,8 @@ pub struct SampleStream<'a, S: ?Sized> {
     key: PixelKey,
     index: u32,
     dim: u32,
+    /// [`Sampler::prepare`] of this sample.
+    prepared: u64,
     /// The last block of [`Sampler::get_block`] (`u32::MAX` when none yet).
     block: u32,
     values: [f32; 4],
@@ -90,6 +105,7 @@ impl<'a, S: Sampler + ?Sized> SampleStream<'a, S> {
             key,
             index,
             dim: 0,
+            prepared: sampler.prepare(key, index),
             block: u32::MAX,
             values: [0.0; 4],
         }
@@ -106,7 +122,9 @@ impl<'a, S: Sampler + ?Sized> SampleStream<'a, S> {
     fn from_block(&mut self, dim: u32) -> Option<f32> {
         let block = dim >> 2;
         if block != self.block {
-            self.values = self.sampler.get_block(self.key, self.index, block)?;
+            self.values = self
+                .sampler
+                .get_block(self.key, self.index, block, self.prepared)?;
             self.block = block;
         }
         Some(self.values[(dim & 3) as usize])

@@ -24,6 +24,7 @@
 
 use super::{mix64, PixelKey, Sampler};
 use glam::Vec2;
+use sobol_burley::parts;
 
 #[derive(Clone, Debug)]
 pub struct SobolSampler {
@@ -35,15 +36,47 @@ impl SobolSampler {
         Self { sample_count }
     }
 
+    /// The seed of dimension group `block / 64` (256 dimensions) of sample `index`: hashed
+    /// from the pixel, the run of 2¹⁶ samples and the group.
+    #[inline(always)]
+    fn seed(key: PixelKey, index: u32, block: u32) -> u32 {
+        let run = index >> 16;
+        let group = block / sobol_burley::NUM_DIMENSION_SETS_4D;
+        mix64(((key.0 as u64) << 32) ^ ((run as u64) << 24) ^ group as u64) as u32
+    }
+
+    /// The sample's position in its sequence's shuffled order, bit-reversed: the part of
+    /// `sobol_burley::sample_4d` that depends on the sample and the seed only, not on the
+    /// dimension set.
+    #[inline(always)]
+    fn shuffled_rev_index(index: u32, seed: u32) -> u32 {
+        parts::owen_scramble_rev(
+            (index & 0xffff).reverse_bits(),
+            parts::hash(seed ^ 0x79c6_8e4a),
+        )
+    }
+
+    /// Dimension set `set` of the sample at `shuffled_rev_index` under `seed`: the rest of
+    /// `sobol_burley::sample_4d` (0.5.0, `src/lib.rs`), step for step, so the values are
+    /// the crate's bit for bit (test `prepared_blocks_are_the_crates_points`).
+    #[inline(always)]
+    fn set(shuffled_rev_index: u32, set: u32, seed: u32) -> [f32; 4] {
+        let sobol = parts::sobol_int4_rev(shuffled_rev_index, set);
+        let scramble = parts::Int4::from([seed.wrapping_mul(0x9c8f_2d3b); 4])
+            ^ parts::Int4::from([set; 4])
+            ^ parts::Int4::from([0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8]);
+        parts::owen_scramble_int4_rev(sobol, parts::hash_int4(scramble))
+            .reverse_bits()
+            .to_f32_norm()
+    }
+
     /// The four values of the aligned block of four dimensions that holds `dim`.
     #[inline]
     fn block(key: PixelKey, index: u32, dim: u32) -> [f32; 4] {
         let block = dim >> 2;
-        let run = index >> 16;
+        let seed = Self::seed(key, index, block);
         let sets = sobol_burley::NUM_DIMENSION_SETS_4D;
-        let seed =
-            mix64(((key.0 as u64) << 32) ^ ((run as u64) << 24) ^ (block / sets) as u64) as u32;
-        sobol_burley::sample_4d(index & 0xffff, block % sets, seed)
+        Self::set(Self::shuffled_rev_index(index, seed), block % sets, seed)
     }
 }
 
@@ -57,9 +90,22 @@ impl Sampler for SobolSampler {
         Self::block(key, index, dim)[(dim & 3) as usize]
     }
 
+    /// The seed and shuffled index of the first dimension group, which holds every block of
+    /// a path shorter than about 30 bounces.
     #[inline(always)]
-    fn get_block(&self, key: PixelKey, index: u32, block: u32) -> Option<[f32; 4]> {
-        Some(Self::block(key, index, block << 2))
+    fn prepare(&self, key: PixelKey, index: u32) -> u64 {
+        let seed = Self::seed(key, index, 0);
+        ((seed as u64) << 32) | Self::shuffled_rev_index(index, seed) as u64
+    }
+
+    #[inline(always)]
+    fn get_block(&self, key: PixelKey, index: u32, block: u32, prepared: u64) -> Option<[f32; 4]> {
+        let sets = sobol_burley::NUM_DIMENSION_SETS_4D;
+        Some(if block < sets {
+            Self::set(prepared as u32, block, (prepared >> 32) as u32)
+        } else {
+            Self::block(key, index, block << 2)
+        })
     }
 
     #[inline]
@@ -71,6 +117,50 @@ impl Sampler for SobolSampler {
             2 => Vec2::new(v[2], v[3]),
             // Straddles two blocks (the integrator's layout never asks for this).
             _ => Vec2::new(v[3], Self::block(key, index, dim + 1)[0]),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::SampleStream;
+
+    /// The per-sample preparation changes no value: every block a stream hands out, in both
+    /// dimension groups and across the 2¹⁶-sample runs, is the crate's `sample_4d` point.
+    #[test]
+    fn prepared_blocks_are_the_crates_points() {
+        let sampler = SobolSampler::new(64);
+        for k in 0..50u32 {
+            let key = PixelKey(mix64(k as u64) as u32);
+            for index in [0, 1, 2, 63, 1000, 65535, 65536, 65537, 1 << 20] {
+                let mut stream = SampleStream::new(&sampler, key, index);
+                for block in [0u32, 1, 2, 5, 63, 64, 65, 130] {
+                    stream.seek(4 * block);
+                    let got = [
+                        stream.next_1d(),
+                        stream.next_1d(),
+                        stream.next_1d(),
+                        stream.next_1d(),
+                    ];
+                    let sets = sobol_burley::NUM_DIMENSION_SETS_4D;
+                    let seed = mix64(
+                        ((key.0 as u64) << 32)
+                            ^ (((index >> 16) as u64) << 24)
+                            ^ (block / sets) as u64,
+                    ) as u32;
+                    let want = sobol_burley::sample_4d(index & 0xffff, block % sets, seed);
+                    assert_eq!(
+                        got.map(f32::to_bits),
+                        want.map(f32::to_bits),
+                        "block {block}"
+                    );
+                    assert_eq!(
+                        sampler.get_2d(key, index, 4 * block),
+                        Vec2::new(want[0], want[1])
+                    );
+                }
+            }
         }
     }
 }
