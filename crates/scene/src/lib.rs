@@ -142,35 +142,30 @@ pub fn offset_origin(p: Vec3, p_error: Vec3, n: Vec3, d: Vec3) -> Vec3 {
     let dist = n.abs().dot(p_error);
     let offset = if n.dot(d) >= 0.0 { n * dist } else { -n * dist };
     let po = p + offset;
-    // Round away from p, so that the rounding of the addition cannot undo the offset. (Four
-    // lanes written as one loop, which the compiler turns into one SSE select chain.)
-    let (x, o) = (po.extend(0.0).to_array(), offset.extend(0.0).to_array());
-    let mut out = [0.0f32; 4];
-    for i in 0..4 {
-        out[i] = step_away(x[i], o[i]);
-    }
-    Vec3::new(out[0], out[1], out[2])
+    // Round away from p, so that the rounding of the addition cannot undo the offset.
+    Vec3::new(
+        step_away(po.x, offset.x),
+        step_away(po.y, offset.y),
+        step_away(po.z, offset.z),
+    )
 }
 
 /// The next float after `x` in the direction of `o`'s sign (`x` itself when `o` is zero or
-/// `x` is not finite): `f32::next_up` or `next_down`, written with selects instead of
-/// branches, as this runs twice per bounce.
+/// `x` is not finite): `f32::next_up` or `next_down`, in integer arithmetic without
+/// branches, as this runs for every ray leaving a surface.
 #[inline(always)]
 fn step_away(x: f32, o: f32) -> f32 {
-    let (bits, sign) = (x.to_bits(), o.to_bits() & 0x8000_0000);
-    // Away from zero when x and o have the same sign, towards it otherwise; from ±0 to the
-    // smallest subnormal of o's sign.
-    let stepped = if x == 0.0 {
-        sign | 1
-    } else if (bits & 0x8000_0000) == sign {
-        bits + 1
-    } else {
-        bits - 1
-    };
+    const SIGN: u32 = 0x8000_0000;
+    let ob = o.to_bits();
+    // From ±0, step as if from a zero of o's sign: to the smallest subnormal of that sign.
+    let bits = if x == 0.0 { ob & SIGN } else { x.to_bits() };
+    // +1 (away from zero) when x and o have the same sign, −1 (towards it) otherwise.
+    let step = (((bits ^ ob) as i32) >> 31) | 1;
+    let stepped = f32::from_bits(bits.wrapping_add(step as u32));
     if o == 0.0 || !x.is_finite() {
         x
     } else {
-        f32::from_bits(stepped)
+        stepped
     }
 }
 
