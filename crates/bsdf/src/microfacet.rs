@@ -175,7 +175,7 @@ impl MicrofacetDistribution {
     fn sample_all_normals(&self, u: Vec2) -> (Vec3, f32) {
         let (au, av) = (self.alpha_u, self.alpha_v);
         let (sin_phi, cos_phi, alpha_2) = if self.is_isotropic() {
-            let (s, c) = (2.0 * PI * u.y).sin_cos();
+            let (s, c) = radia_math::trig::sin_cos_turns(u.y);
             (s, c, au * au)
         } else {
             // The azimuth of an elliptical distribution: tan φ' = (αv/αu) tan 2πu, in the

@@ -1,5 +1,7 @@
-//! Inverse trigonometry in `f32` without a call into libm: `atan2` and `acos` from one odd
-//! polynomial for atan on [0, 1], evaluated with FMA. Dr.Jit (Mitsuba 3's `dr::atan2`) also
+//! Trigonometry in `f32` without a call into libm: `atan2` and `acos` from one odd
+//! polynomial for atan on [0, 1], evaluated with FMA; `sin_cos_small` and `sin_cos_turns`
+//! from the Taylor polynomials of sin and cos on [−π/4, π/4], for the warps that turn a
+//! uniform number into an angle (2πu) or a ratio into one (the concentric disk). Dr.Jit (Mitsuba 3's `dr::atan2`) also
 //! evaluates its own polynomial rather than the C library's function; glibc's `atan2f` goes
 //! through an errno-handling wrapper and a table-driven kernel, about 10% of the instructions
 //! of an environment-lit render, where these take a third of that.
@@ -60,6 +62,43 @@ pub fn acos(x: f32) -> f32 {
     atan2(((1.0 - x) * (1.0 + x)).sqrt(), x)
 }
 
+/// (sin a, cos a) for |a| ≤ π/4: Taylor polynomials of degree 9 and 10, whose truncation
+/// errors there (below 2·10⁻⁹ and 3·10⁻¹⁰) are far under one f32 ulp. glibc's `sincosf`
+/// does a range reduction and a dispatch on the argument's size first: in a diffuse scene it
+/// was 2% of the render time, through the cosine-weighted hemisphere's concentric disk.
+#[inline(always)]
+pub fn sin_cos_small(a: f32) -> (f32, f32) {
+    let a2 = a * a;
+    let s = (1.0 / 362_880.0f32)
+        .mul_add(a2, -1.0 / 5040.0)
+        .mul_add(a2, 1.0 / 120.0)
+        .mul_add(a2, -1.0 / 6.0);
+    let sin = (s * a2).mul_add(a, a);
+    let c = (-1.0 / 3_628_800.0f32)
+        .mul_add(a2, 1.0 / 40_320.0)
+        .mul_add(a2, -1.0 / 720.0)
+        .mul_add(a2, 1.0 / 24.0)
+        .mul_add(a2, -0.5);
+    let cos = c.mul_add(a2, 1.0);
+    (sin, cos)
+}
+
+/// (sin 2πu, cos 2πu): the angle given in turns, as the warps have it (u ∈ [0, 1)). The
+/// nearest quarter turn is taken off exactly (4u and its distance to an integer are exact in
+/// f32), what remains is within ±π/4 for [`sin_cos_small`], and the quarter turns rotate it
+/// back. Finite `u` only.
+#[inline(always)]
+pub fn sin_cos_turns(u: f32) -> (f32, f32) {
+    let q = (4.0 * u).round();
+    let (s, c) = sin_cos_small((4.0 * u - q) * FRAC_PI_2);
+    match (q as i64).rem_euclid(4) {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -69,6 +108,50 @@ mod tests {
         let w = want as f32;
         let ulp = (f32::from_bits(w.abs().to_bits() + 1) - w.abs()) as f64;
         ((got as f64) - want).abs() / ulp
+    }
+
+    /// Absolute error against f64 in units of f32's epsilon (sin and cos are bounded by 1,
+    /// so near their zeros an absolute bound is the meaningful one).
+    fn abs_eps(got: f32, want: f64) -> f64 {
+        ((got as f64) - want).abs() / f32::EPSILON as f64
+    }
+
+    #[test]
+    fn sin_cos_small_within_one_ulp() {
+        let (mut worst, mut worst_abs): (f64, f64) = (0.0, 0.0);
+        let n = 1_000_000;
+        for i in 0..=n {
+            let a = (i as f32 / n as f32 * 2.0 - 1.0) * std::f32::consts::FRAC_PI_4;
+            let (s, c) = sin_cos_small(a);
+            let (ws, wc) = (a as f64).sin_cos();
+            if a != 0.0 {
+                worst = worst.max(ulps(s, ws));
+            }
+            worst = worst.max(ulps(c, wc));
+            worst_abs = worst_abs.max(abs_eps(s, ws)).max(abs_eps(c, wc));
+        }
+        assert!(worst <= 1.5, "{worst} ulps");
+        assert!(worst_abs <= 0.5, "{worst_abs} eps");
+        assert_eq!(sin_cos_small(0.0), (0.0, 1.0));
+    }
+
+    #[test]
+    fn sin_cos_turns_all_round() {
+        let mut worst: f64 = 0.0;
+        let n = 1_000_000;
+        for i in 0..n {
+            for u in [i as f32 / n as f32, -(i as f32) / n as f32, 1.0 + i as f32 / n as f32] {
+                let (s, c) = sin_cos_turns(u);
+                let (ws, wc) = (u as f64 * std::f64::consts::TAU).sin_cos();
+                worst = worst.max(abs_eps(s, ws)).max(abs_eps(c, wc));
+            }
+        }
+        assert!(worst <= 1.0, "{worst} eps");
+        // Exact at the quarter turns.
+        assert_eq!(sin_cos_turns(0.0), (0.0, 1.0));
+        assert_eq!(sin_cos_turns(0.25), (1.0, -0.0));
+        assert_eq!(sin_cos_turns(0.5), (-0.0, -1.0));
+        assert_eq!(sin_cos_turns(0.75), (-1.0, 0.0));
     }
 
     #[test]

@@ -3,6 +3,7 @@
 //! area (square, disk, triangle) or per unit solid angle (directions).
 
 use glam::{Vec2, Vec3};
+use radia_math::trig::{sin_cos_small, sin_cos_turns};
 use radia_math::{safe_sqrt, INV_FOUR_PI, INV_PI, INV_TWO_PI, PI};
 
 /// Concentric (Shirley-Chiu) map to the unit disk; pdf 1/π.
@@ -13,13 +14,15 @@ pub fn square_to_uniform_disk_concentric(u: Vec2) -> Vec2 {
     if x == 0.0 && y == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, phi) = if x * x > y * y {
-        (x, (PI / 4.0) * (y / x))
+    // φ = (π/4)(y/x), or π/2 − (π/4)(x/y) whose sine and cosine are the cosine and sine
+    // of (π/4)(x/y): either way an angle within ±π/4.
+    if x * x > y * y {
+        let (s, c) = sin_cos_small((PI / 4.0) * (y / x));
+        Vec2::new(x * c, x * s)
     } else {
-        (y, PI / 2.0 - (PI / 4.0) * (x / y))
-    };
-    let (s, c) = phi.sin_cos();
-    Vec2::new(r * c, r * s)
+        let (s, c) = sin_cos_small((PI / 4.0) * (x / y));
+        Vec2::new(y * s, y * c)
+    }
 }
 
 #[inline]
@@ -45,7 +48,7 @@ pub fn cosine_hemisphere_pdf(v: Vec3) -> f32 {
 pub fn square_to_uniform_hemisphere(u: Vec2) -> Vec3 {
     let z = u.x;
     let r = safe_sqrt(1.0 - z * z);
-    let (s, c) = (2.0 * PI * u.y).sin_cos();
+    let (s, c) = sin_cos_turns(u.y);
     Vec3::new(r * c, r * s, z)
 }
 
@@ -63,7 +66,7 @@ pub fn uniform_hemisphere_pdf(v: Vec3) -> f32 {
 pub fn square_to_uniform_sphere(u: Vec2) -> Vec3 {
     let z = 1.0 - 2.0 * u.y;
     let r = safe_sqrt(1.0 - z * z);
-    let (s, c) = (2.0 * PI * u.x).sin_cos();
+    let (s, c) = sin_cos_turns(u.x);
     Vec3::new(r * c, r * s, z)
 }
 
@@ -84,7 +87,7 @@ pub fn square_to_uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
     let cos_theta = (1.0 - one_minus_cos).max(cos_max);
     // sin² θ = (1 − cos θ)(1 + cos θ)
     let sin_theta = safe_sqrt(one_minus_cos * (2.0 - one_minus_cos));
-    let (s, c) = (2.0 * PI * u.y).sin_cos();
+    let (s, c) = sin_cos_turns(u.y);
     Vec3::new(sin_theta * c, sin_theta * s, cos_theta)
 }
 

@@ -634,7 +634,7 @@ impl SphereCone {
         let cos_theta = 1.0 - omc;
         let sin2_theta = omc * (2.0 - omc);
         let sin_theta = sin2_theta.sqrt();
-        let (sin_phi, cos_phi) = (2.0 * PI * u.y).sin_cos();
+        let (sin_phi, cos_phi) = radia_math::trig::sin_cos_turns(u.y);
         let frame = Frame::from_normal((center - ref_p).normalize());
         let d = frame.to_world(Vec3::new(
             sin_theta * cos_phi,

@@ -53,7 +53,7 @@
 
 use crate::description::RgbImage;
 use glam::{Affine3A, Mat3, Vec2, Vec3};
-use radia_math::{luminance, safe_acos, safe_sqrt, Spectrum, INV_PI, INV_TWO_PI, PI};
+use radia_math::{luminance, safe_acos, safe_sqrt, Spectrum, INV_PI, INV_TWO_PI};
 use radia_sampling::{warp, DiscreteDistribution};
 
 use super::EmitterSample;
@@ -297,8 +297,8 @@ impl Envmap {
         let corners = self.corners(i, j);
         let st = warp::square_to_bilinear(Vec2::new(col.u_remapped, row.u_remapped), corners);
         let (cos_theta, sin_theta) = self.cell_cos_sin(j, st.y);
-        let phi = 2.0 * PI * (i as f32 + 0.5 + st.x) / self.width as f32;
-        let (sin_phi, cos_phi) = phi.sin_cos();
+        let (sin_phi, cos_phi) =
+            radia_math::trig::sin_cos_turns((i as f32 + 0.5 + st.x) / self.width as f32);
         let local = Vec3::new(sin_phi * sin_theta, cos_theta, -cos_phi * sin_theta);
         let d = (self.to_world * local).normalize();
         // Exactly `pdf_direction(d)`: the density at the direction returned, which differs
