@@ -34,6 +34,44 @@ pub struct Shape {
     pub emitter: Option<u32>,
     /// Total surface area.
     pub area: f32,
+    /// Of an emitting mesh, what light sampling needs of each triangle, made once here
+    /// rather than at every light sample (empty otherwise: [`Shape::light_triangle`] then
+    /// makes it on the spot).
+    light_triangles: Vec<LightTriangle>,
+}
+
+/// One triangle of a mesh as light sampling sees it: its vertices and the quantities derived
+/// from them, by the same operations as before they were cached (so nothing changes by a bit).
+#[derive(Clone, Copy, Debug)]
+struct LightTriangle {
+    v: [Vec3; 3],
+    /// (v1 − v0) × (v2 − v0): twice the area times the unit normal, unflipped.
+    twice_area_n: Vec3,
+    /// Unit geometric normal, flipped with `flip_normals` ([`mesh_normal`]).
+    n: Vec3,
+    area: f32,
+    centroid: Vec3,
+    /// Squared distance from the centroid to the farthest vertex.
+    r2: f32,
+}
+
+impl LightTriangle {
+    fn new(mesh: &Mesh, face: u32) -> Self {
+        let v = mesh_triangle(mesh, face);
+        let centroid = (v[0] + v[1] + v[2]) * (1.0 / 3.0);
+        let r2 = (v[0] - centroid)
+            .length_squared()
+            .max((v[1] - centroid).length_squared())
+            .max((v[2] - centroid).length_squared());
+        Self {
+            v,
+            twice_area_n: (v[1] - v[0]).cross(v[2] - v[0]),
+            n: mesh_normal(mesh, &v),
+            area: triangle_area(&v),
+            centroid,
+            r2,
+        }
+    }
 }
 
 /// A point on a surface reached by a ray: the local geometry the integrator shades with.
@@ -125,11 +163,27 @@ impl Shape {
                 )
             }
         };
+        let light_triangles = match (&kind, emitter) {
+            (ShapeKind::Mesh(mesh), Some(_)) => (0..mesh.indices.len() as u32)
+                .map(|face| LightTriangle::new(mesh, face))
+                .collect(),
+            _ => Vec::new(),
+        };
         Self {
             kind,
             bsdf,
             emitter,
             area,
+            light_triangles,
+        }
+    }
+
+    /// Triangle `face` of `mesh` (this shape's) for light sampling: cached for emitters.
+    #[inline(always)]
+    fn light_triangle(&self, mesh: &Mesh, face: u32) -> LightTriangle {
+        match self.light_triangles.get(face as usize) {
+            Some(t) => *t,
+            None => LightTriangle::new(mesh, face),
         }
     }
 
@@ -334,7 +388,7 @@ impl Shape {
     /// Area of light primitive `face`: one triangle of a mesh, else the whole surface.
     pub fn part_area(&self, face: u32) -> f32 {
         match &self.kind {
-            ShapeKind::Mesh(mesh) => triangle_area(&mesh_triangle(mesh, face)),
+            ShapeKind::Mesh(mesh) => self.light_triangle(mesh, face).area,
             _ => self.area,
         }
     }
@@ -343,14 +397,15 @@ impl Shape {
     pub fn sample_position(&self, face: u32, u: Vec2) -> PositionSample {
         match &self.kind {
             ShapeKind::Mesh(mesh) => {
-                let v = mesh_triangle(mesh, face);
+                let t = self.light_triangle(mesh, face);
+                let v = t.v;
                 let b = warp::square_to_uniform_triangle(u);
                 let (p, p_error) = triangle_point(v[0], v[1] - v[0], v[2] - v[0], b.x, b.y);
                 PositionSample {
                     p,
                     p_error,
-                    n: mesh_normal(mesh, &v),
-                    pdf: 1.0 / triangle_area(&v),
+                    n: t.n,
+                    pdf: 1.0 / t.area,
                 }
             }
             ShapeKind::Sphere {
@@ -408,8 +463,9 @@ impl Shape {
                 }
             }
             ShapeKind::Mesh(mesh) => {
-                let v = mesh_triangle(mesh, face);
-                if let Some(omega) = spherical_sampling(&v, ref_p) {
+                let t = self.light_triangle(mesh, face);
+                if let Some(omega) = spherical_sampling(&t, ref_p) {
+                    let v = t.v;
                     let b = sample_spherical_triangle(&v, ref_p, u)?;
                     let (p, p_error) = triangle_point(v[0], v[1] - v[0], v[2] - v[0], b[1], b[2]);
                     let delta = p - ref_p;
@@ -418,7 +474,7 @@ impl Shape {
                     return d.is_finite().then(|| DirectionSample {
                         p,
                         p_error,
-                        n: mesh_normal(mesh, &v),
+                        n: t.n,
                         d,
                         dist,
                         pdf: 1.0 / omega,
@@ -453,7 +509,7 @@ impl Shape {
                 }
             }
             ShapeKind::Mesh(mesh) => {
-                if let Some(omega) = spherical_sampling(&mesh_triangle(mesh, face), ref_p) {
+                if let Some(omega) = spherical_sampling(&self.light_triangle(mesh, face), ref_p) {
                     return 1.0 / omega;
                 }
             }
@@ -492,18 +548,13 @@ const MAX_SPHERICAL_SAMPLE_AREA: f32 = 6.22;
 /// estimate this replaces, A / d_min², passed on half of the light samples, of which one in
 /// 150 was then sampled by solid angle.)
 #[inline]
-fn spherical_sampling(v: &[Vec3; 3], p: Vec3) -> Option<f32> {
-    let c = (v[0] + v[1] + v[2]) * (1.0 / 3.0);
-    let r2 = (v[0] - c)
-        .length_squared()
-        .max((v[1] - c).length_squared())
-        .max((v[2] - c).length_squared());
-    let to_c = c - p;
+fn spherical_sampling(t: &LightTriangle, p: Vec3) -> Option<f32> {
+    let v = &t.v;
+    let to_c = t.centroid - p;
     let d2 = to_c.length_squared();
-    if d2 > 4.0 * r2 {
+    if d2 > 4.0 * t.r2 {
         // A cos θ / d² = ½ |(e1 × e2) · (c − p)| / d³.
-        let twice_area_n = (v[1] - v[0]).cross(v[2] - v[0]);
-        let estimate = 0.5 * twice_area_n.dot(to_c).abs() / (d2 * d2.sqrt());
+        let estimate = 0.5 * t.twice_area_n.dot(to_c).abs() / (d2 * d2.sqrt());
         if !(estimate >= MIN_SPHERICAL_SAMPLE_AREA) {
             return None;
         }
