@@ -203,8 +203,8 @@ impl Envmap {
         let x = u * w as f32 - 0.5;
         let x0 = x.floor();
         let fx = x - x0;
-        let i0 = (x0 as i64).rem_euclid(w as i64) as usize;
-        let i1 = (i0 + 1) % w;
+        let i0 = wrap_column(x0, w);
+        let i1 = if i0 + 1 == w { 0 } else { i0 + 1 };
         let y = v * (h - 1) as f32;
         let j0 = (y.floor().max(0.0) as usize).min(h - 2);
         let fy = (y - j0 as f32).clamp(0.0, 1.0);
@@ -265,7 +265,7 @@ impl Envmap {
         u -= u.floor();
         let x = u * w as f32 - 0.5;
         let x0 = x.floor();
-        let i = (x0 as i64).rem_euclid(w as i64) as usize;
+        let i = wrap_column(x0, w);
         // Rows by comparison with the same cos θ table sampling interpolates in.
         let inner = &self.row_cos[1..self.height - 1];
         let j = inner.partition_point(|&c| c > d.y);
@@ -336,4 +336,18 @@ impl Envmap {
         let (i, j, st) = self.cell_of(d);
         warp::bilerp(st, self.corners(i, j)) * self.inv_total
     }
+}
+
+/// Column `x0` (a whole number) wrapped into `0..w`: `x0 mod w`, Euclidean, without the
+/// integer division in the usual case, where x0 ∈ [−1, w − 1] (x = u w − ½ for u ∈ [0, 1]).
+#[inline(always)]
+fn wrap_column(x0: f32, w: usize) -> usize {
+    let (i, w) = (x0 as i64, w as i64);
+    (if i >= 0 && i < w {
+        i
+    } else if i == -1 {
+        w - 1
+    } else {
+        i.rem_euclid(w)
+    }) as usize
 }
