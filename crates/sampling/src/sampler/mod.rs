@@ -68,10 +68,11 @@ pub trait Sampler: Sync + Send {
     fn prepare(&self, _key: PixelKey, _index: u32) -> u64 {
         0
     }
-    /// Values `4 block .. 4 block + 4` at once, for samplers that make them together (one
-    /// Sobol set): [`SampleStream`] then keeps the block instead of making it again for each
-    /// of its values. `None` (the default) for samplers that make each request on its own.
-    /// `prepared` is this sample's [`Sampler::prepare`].
+    /// Values `4 block .. 4 block + 8` (blocks `block` and `block + 1`) at once, for samplers
+    /// that make them together (two Sobol sets, eight lanes wide): [`SampleStream`] then keeps
+    /// them instead of making them again for each value (a bounce's light and BSDF blocks
+    /// are consecutive). `None` (the default) for samplers that make each request on its
+    /// own. `prepared` is this sample's [`Sampler::prepare`].
     #[inline(always)]
     fn get_block(
         &self,
@@ -79,7 +80,7 @@ pub trait Sampler: Sync + Send {
         _index: u32,
         _block: u32,
         _prepared: u64,
-    ) -> Option<[f32; 4]> {
+    ) -> Option<[f32; 8]> {
         None
     }
 }
@@ -92,9 +93,10 @@ pub struct SampleStream<'a, S: ?Sized> {
     dim: u32,
     /// [`Sampler::prepare`] of this sample.
     prepared: u64,
-    /// The last block of [`Sampler::get_block`] (`u32::MAX` when none yet).
+    /// The first of the two blocks of the last [`Sampler::get_block`] (`u32::MAX - 1` when
+    /// none yet), and their values.
     block: u32,
-    values: [f32; 4],
+    values: [f32; 8],
 }
 
 impl<'a, S: Sampler + ?Sized> SampleStream<'a, S> {
@@ -106,8 +108,8 @@ impl<'a, S: Sampler + ?Sized> SampleStream<'a, S> {
             index,
             dim: 0,
             prepared: sampler.prepare(key, index),
-            block: u32::MAX,
-            values: [0.0; 4],
+            block: u32::MAX - 1,
+            values: [0.0; 8],
         }
     }
 
@@ -121,13 +123,13 @@ impl<'a, S: Sampler + ?Sized> SampleStream<'a, S> {
     #[inline(always)]
     fn from_block(&mut self, dim: u32) -> Option<f32> {
         let block = dim >> 2;
-        if block != self.block {
+        if block.wrapping_sub(self.block) > 1 {
             self.values = self
                 .sampler
                 .get_block(self.key, self.index, block, self.prepared)?;
             self.block = block;
         }
-        Some(self.values[(dim & 3) as usize])
+        Some(self.values[(dim - 4 * self.block) as usize & 7])
     }
 
     #[inline]

@@ -29,11 +29,65 @@ use sobol_burley::parts;
 #[derive(Clone, Debug)]
 pub struct SobolSampler {
     sample_count: u32,
+    /// [`pair_directions`].
+    pairs: &'static [[u32; 8]],
+}
+
+/// The crate's direction numbers regrouped for two consecutive dimension sets at once: entry
+/// `16 set + b` holds, for the eight dimensions `4 set .. 4 set + 8`, the number that bit b
+/// of the reversed sample index (counted from the top) XORs in. Each is read back from the
+/// crate as `sobol_rev(1 << (31 − b), dim)`, the Sobol point of an index with that one bit.
+fn pair_directions() -> &'static [[u32; 8]] {
+    static TABLE: std::sync::OnceLock<Vec<[u32; 8]>> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        let sets = sobol_burley::NUM_DIMENSION_SETS_4D;
+        (0..sets - 1)
+            .flat_map(|set| {
+                (0..16u32).map(move |b| {
+                    std::array::from_fn(|l| parts::sobol_rev(1 << (31 - b), 4 * set + l as u32))
+                })
+            })
+            .collect()
+    })
 }
 
 impl SobolSampler {
     pub fn new(sample_count: u32) -> Self {
-        Self { sample_count }
+        Self {
+            sample_count,
+            pairs: pair_directions(),
+        }
+    }
+
+    /// Dimension sets `set` and `set + 1` (< 64) of the sample at `shuffled_rev_index` under
+    /// `seed`: [`SobolSampler::set`] for both, with one walk over the index's bits for the
+    /// two; bit for bit the same values.
+    #[inline(always)]
+    fn set_pair(&self, shuffled_rev_index: u32, set: u32, seed: u32) -> [f32; 8] {
+        let dirs = &self.pairs[16 * set as usize..][..16];
+        let mut sobol = [0u32; 8];
+        let mut bits = shuffled_rev_index & 0xffff_0000;
+        while bits != 0 {
+            let b = bits.leading_zeros();
+            bits &= !(0x8000_0000 >> b);
+            let v = &dirs[b as usize];
+            for l in 0..8 {
+                sobol[l] ^= v[l];
+            }
+        }
+        // The rest as `set` does it, four lanes (one set) at a time with the crate's own
+        // SSE parts.
+        let seed = parts::Int4::from([seed.wrapping_mul(0x9c8f_2d3b); 4]);
+        let lane = parts::Int4::from([0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8]);
+        let finish = |half: [u32; 4], set: u32| {
+            let scramble = parts::hash_int4(seed ^ parts::Int4::from([set; 4]) ^ lane);
+            parts::owen_scramble_int4_rev(parts::Int4::from(half), scramble)
+                .reverse_bits()
+                .to_f32_norm()
+        };
+        let lo = finish([sobol[0], sobol[1], sobol[2], sobol[3]], set);
+        let hi = finish([sobol[4], sobol[5], sobol[6], sobol[7]], set + 1);
+        [lo[0], lo[1], lo[2], lo[3], hi[0], hi[1], hi[2], hi[3]]
     }
 
     /// The seed of dimension group `block / 64` (256 dimensions) of sample `index`: hashed
@@ -99,12 +153,16 @@ impl Sampler for SobolSampler {
     }
 
     #[inline(always)]
-    fn get_block(&self, key: PixelKey, index: u32, block: u32, prepared: u64) -> Option<[f32; 4]> {
+    fn get_block(&self, key: PixelKey, index: u32, block: u32, prepared: u64) -> Option<[f32; 8]> {
         let sets = sobol_burley::NUM_DIMENSION_SETS_4D;
-        Some(if block < sets {
-            Self::set(prepared as u32, block, (prepared >> 32) as u32)
+        Some(if block + 1 < sets {
+            self.set_pair(prepared as u32, block, (prepared >> 32) as u32)
         } else {
-            Self::block(key, index, block << 2)
+            let (a, b) = (
+                Self::block(key, index, block << 2),
+                Self::block(key, index, (block + 1) << 2),
+            );
+            [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
         })
     }
 
@@ -135,7 +193,7 @@ mod tests {
             let key = PixelKey(mix64(k as u64) as u32);
             for index in [0, 1, 2, 63, 1000, 65535, 65536, 65537, 1 << 20] {
                 let mut stream = SampleStream::new(&sampler, key, index);
-                for block in [0u32, 1, 2, 5, 63, 64, 65, 130] {
+                for block in [0u32, 1, 2, 5, 4, 3, 62, 63, 64, 65, 130, 6, 7, 8, 7] {
                     stream.seek(4 * block);
                     let got = [
                         stream.next_1d(),
