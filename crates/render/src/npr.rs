@@ -4,7 +4,8 @@
 //! ```xml
 //! <integrator type="npr">
 //!     <string name="style" value="toon"/>   <!-- or gooch (b, y, alpha, beta) -->
-//!     <integer name="levels" value="4"/>
+//!     <integer name="levels" value="4"/>   <!-- or a colour ramp, one colour a level: -->
+//!     <!-- <string name="ramp" value="0.1, 0.1, 0.3; 0.3 0.4 0.8; 0.9, 0.95, 1"/> -->
 //!     <float name="line_width" value="1.5"/>  <!-- pixels; 0: no lines -->
 //!     <rgb name="line_color" value="0"/>
 //!     <float name="crease_angle" value="60"/>
@@ -15,7 +16,9 @@
 //! * Fill. The light is the scene's first non-environment emitter, seen as a direction l
 //!   from the hit (no shadows: the bands are the model's). `toon`: cos θ = max(0, n·l)
 //!   quantised to k = min(⌊cos θ · N⌋, N − 1) and shown as kd · k/(N − 1), so exactly N
-//!   bands from unlit to fully lit. `gooch` (Gooch, Gooch, Shirley, Cohen, "A
+//!   bands from unlit to fully lit; with a `ramp` of N colours (separated by `;`, each a
+//!   grey value or r, g, b) band k shows the ramp's k-th colour itself, whatever the
+//!   material (a ramp paints the bands; `levels` keeps the material's colour). `gooch` (Gooch, Gooch, Shirley, Cohen, "A
 //!   Non-Photorealistic Lighting Model for Automatic Technical Illustration", SIGGRAPH
 //!   1998): t = (1 + n·l)/2, colour t·k_warm + (1 − t)·k_cool with k_cool = (0, 0, b) +
 //!   α·kd and k_warm = (y, y, 0) + β·kd. kd is the BSDF's diffuse reflectance (the AOV
@@ -87,16 +90,17 @@ impl<'a> NprIntegrator<'a> {
             })
             .map_or(n, |es| es.d);
         let cos = n.dot(l);
-        match self.desc.style {
-            NprStyle::Toon { levels } => {
+        match &self.desc.style {
+            NprStyle::Toon { levels, ramp } => {
+                let levels = *levels;
                 let k = ((cos.max(0.0) * levels as f32) as u32).min(levels - 1);
-                if levels == 1 {
-                    kd
-                } else {
-                    kd * (k as f32 / (levels - 1) as f32)
+                match ramp {
+                    Some(ramp) => ramp[k as usize],
+                    None if levels == 1 => kd,
+                    None => kd * (k as f32 / (levels - 1) as f32),
                 }
             }
-            NprStyle::Gooch { b, y, alpha, beta } => {
+            &NprStyle::Gooch { b, y, alpha, beta } => {
                 let cool = Spectrum::new(0.0, 0.0, b) + kd * alpha;
                 let warm = Spectrum::new(y, y, 0.0) + kd * beta;
                 let t = (1.0 + cos) * 0.5;

@@ -99,3 +99,90 @@ fn silhouette_lines_exactly_where_the_depth_jumps() {
         }
     }
 }
+
+/// The toon sphere of `toon_has_exactly_n_bands_on_a_sphere` with `fill` as the integrator's
+/// toon parameters: (image, whether each pixel is on the sphere).
+fn toon_sphere(name: &str, fill: &str) -> (Vec<radia_math::Spectrum>, Vec<bool>) {
+    let xml = format!(
+        r#"<scene version="3.0.0">
+        <integrator type="aov"><string name="aovs" value="s:shape_index"/>
+            <integrator type="npr">{fill}<float name="line_width" value="0"/></integrator></integrator>
+        {}
+        <shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="1"/></bsdf></shape>
+        <emitter type="directional"><vector name="direction" value="-1, -0.3, 0.2"/></emitter>
+        </scene>"#,
+        sensor("0, 0, -4", "0, 0, 0", 35.0, 64, 64)
+    );
+    let out = render_xml(name, &xml, 1);
+    let aovs = out.aovs.as_ref().unwrap();
+    let shape = &aovs.planes[aovs.names.iter().position(|n| n == "s.I").unwrap()];
+    (out.image.pixels, shape.iter().map(|&s| s == 1.0).collect())
+}
+
+#[test]
+fn toon_ramp_maps_each_band_to_exactly_its_colour() {
+    use radia_math::Spectrum;
+    let ramp = [
+        Spectrum::new(0.05, 0.02, 0.2),
+        Spectrum::new(0.7, 0.1, 0.1),
+        Spectrum::new(0.2, 0.9, 0.3),
+        Spectrum::new(1.0, 1.0, 0.6),
+    ];
+    // The same samples with plain levels and a white sphere show band k as k/3 exactly,
+    // which tells each pixel's band.
+    let (bands, on_sphere) = toon_sphere("ramp-levels", r#"<integer name="levels" value="4"/>"#);
+    let text = "0.05, 0.02, 0.2; 0.7 0.1 0.1; 0.2,0.9,0.3 ; 1, 1, 0.6";
+    let (image, _) = toon_sphere("ramp", &format!(r#"<string name="ramp" value="{text}"/>"#));
+    let mut seen = [0usize; 4];
+    for (i, (&b, &p)) in bands.iter().zip(&image).enumerate() {
+        if !on_sphere[i] {
+            continue;
+        }
+        let k = (b.x * 3.0).round() as usize;
+        assert_eq!(b, Spectrum::splat(k as f32 / 3.0), "pixel {i} is not one band");
+        assert_eq!(p, ramp[k], "pixel {i} in band {k}");
+        seen[k] += 1;
+    }
+    assert!(seen.iter().all(|&n| n > 0), "every band on the sphere: {seen:?}");
+    // A one-value colour is a grey.
+    let (image, on_sphere) = toon_sphere("ramp-grey", r#"<string name="ramp" value="0.25; 0.5"/>"#);
+    let greys: BTreeSet<u32> = image
+        .iter()
+        .zip(&on_sphere)
+        .filter(|(_, &on)| on)
+        .map(|(p, _)| {
+            assert!(p.x == p.y && p.y == p.z, "{p:?}");
+            p.x.to_bits()
+        })
+        .collect();
+    assert_eq!(greys, [0.25f32.to_bits(), 0.5f32.to_bits()].into());
+}
+
+#[test]
+fn toon_ramp_errors_name_the_problem() {
+    for (name, params, needle) in [
+        ("ramp-text", r#"<string name="ramp" value="0.1; red"/>"#, "colour 2 (\"red\") is not numbers"),
+        ("ramp-two", r#"<string name="ramp" value="0.1, 0.2"/>"#, "one grey value or three"),
+        ("ramp-neg", r#"<string name="ramp" value="0.1; -1"/>"#, "non-negative"),
+        ("ramp-empty", r#"<string name="ramp" value="0.1;;0.3"/>"#, "colour 2"),
+        (
+            "ramp-levels",
+            r#"<integer name="levels" value="3"/><string name="ramp" value="0; 1"/>"#,
+            "\"levels\" is 3 but the ramp has 2 colours",
+        ),
+        ("ramp-gooch", r#"<string name="style" value="gooch"/><string name="ramp" value="0; 1"/>"#, "\"ramp\""),
+    ] {
+        let dir = std::env::temp_dir().join(format!("radia-npr-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("scene.xml");
+        let xml = format!(
+            r#"<scene version="3.0.0"><integrator type="npr">{params}</integrator>
+            <shape type="sphere"/></scene>"#
+        );
+        std::fs::write(&path, xml).unwrap();
+        let err = load_mitsuba_xml(&path, &[]).err().unwrap_or_else(|| panic!("{name} loaded"));
+        let text = err.to_string();
+        assert!(text.contains(needle), "{name}: {text}");
+        assert!(text.contains("scene.xml") && err.line.is_some(), "{name}: {text}");
+    }
+}

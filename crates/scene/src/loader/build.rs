@@ -218,15 +218,34 @@ fn build_classic_integrator(mut p: Props<'_>) -> Result<IntegratorDesc, LoadErro
     })
 }
 
-/// radia's `npr` integrator (`radia_render::npr`): `style` toon (`levels`, default 4) or
+/// radia's `npr` integrator (`radia_render::npr`): `style` toon (`levels`, default 4, or a
+/// colour `ramp`) or
 /// gooch (`b` 0.4, `y` 0.4, `alpha` 0.2, `beta` 0.6, Gooch et al. 1998's values);
 /// `line_width` (pixels, default 1), `line_color` (default black), `crease_angle`
 /// (degrees, default 60), `depth_threshold` (default 0.05).
 fn build_npr_integrator(mut p: Props<'_>) -> Result<IntegratorDesc, LoadError> {
     let style = match p.string_opt("style")?.unwrap_or("toon") {
-        "toon" => NprStyle::Toon {
-            levels: p.int("levels", 4, 1, 256)? as u32,
-        },
+        "toon" => {
+            let given_levels = p.has("levels");
+            let levels = p.int("levels", 4, 1, 256)? as u32;
+            let ramp = match p.string_opt("ramp")? {
+                None => None,
+                Some(text) => {
+                    let ramp = parse_ramp(text).map_err(|e| p.err_at(p.pos_of("ramp"), e))?;
+                    if given_levels && levels as usize != ramp.len() {
+                        return Err(p.err_at(
+                            p.pos_of("levels"),
+                            format!("\"levels\" is {levels} but the ramp has {} colours (give one or the other)", ramp.len()),
+                        ));
+                    }
+                    Some(ramp)
+                }
+            };
+            NprStyle::Toon {
+                levels: ramp.as_ref().map_or(levels, |r| r.len() as u32),
+                ramp,
+            }
+        }
         "gooch" => NprStyle::Gooch {
             b: p.float("b", 0.4)? as f32,
             y: p.float("y", 0.4)? as f32,
@@ -262,6 +281,39 @@ fn build_npr_integrator(mut p: Props<'_>) -> Result<IntegratorDesc, LoadError> {
         }),
         ..IntegratorDesc::default()
     })
+}
+
+/// The toon `ramp`: colours separated by `;`, each one grey value or three components r, g, b
+/// (separated by commas or spaces, as an `rgb` value), non-negative; 1 to 256 of them, from
+/// the unlit band to the fully lit one.
+fn parse_ramp(text: &str) -> Result<Vec<radia_math::Spectrum>, String> {
+    let colours: Vec<&str> = text.split(';').map(str::trim).collect();
+    if colours.len() > 256 {
+        return Err(format!("\"ramp\" has {} colours; at most 256", colours.len()));
+    }
+    colours
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let v: Vec<f32> = c
+                .split(|ch: char| ch == ',' || ch.is_whitespace())
+                .filter(|t| !t.is_empty())
+                .map(|t| t.parse::<f32>())
+                .collect::<Result<_, _>>()
+                .map_err(|_| format!("\"ramp\" colour {} (\"{c}\") is not numbers", i + 1))?;
+            let ok = (v.len() == 1 || v.len() == 3) && v.iter().all(|x| x.is_finite() && *x >= 0.0);
+            if !ok {
+                return Err(format!(
+                    "\"ramp\" colour {} (\"{c}\") must be one grey value or three non-negative numbers r, g, b (colours are separated by ';')",
+                    i + 1
+                ));
+            }
+            Ok(match v[..] {
+                [g] => radia_math::Spectrum::splat(g),
+                _ => radia_math::Spectrum::new(v[0], v[1], v[2]),
+            })
+        })
+        .collect()
 }
 
 /// Mitsuba's `aov` integrator: the `aovs` string and at most one nested integrator, whose
