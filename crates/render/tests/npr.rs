@@ -1,34 +1,11 @@
 //! The `npr` integrator: toon shading has exactly N bands on a sphere; silhouette lines
 //! appear exactly where the neighbours' depths jump, and nowhere else.
 
-use radia_render::{render, RenderOptions, RenderOutput};
-use radia_sampling::SamplerKind;
-use radia_scene::{load_mitsuba_xml, Scene};
+mod common;
+
+use common::{aov_plane, render_xml, sensor, write_scene};
+use radia_scene::load_mitsuba_xml;
 use std::collections::BTreeSet;
-use std::sync::atomic::AtomicBool;
-
-fn render_xml(name: &str, xml: &str, spp: u32) -> RenderOutput {
-    let dir = std::env::temp_dir().join(format!("radia-npr-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("scene.xml");
-    std::fs::write(&path, xml).unwrap();
-    let scene = Scene::build(load_mitsuba_xml(&path, &[]).unwrap_or_else(|e| panic!("{e}")));
-    let options = RenderOptions {
-        spp,
-        seed: 3,
-        sampler: SamplerKind::Independent,
-    };
-    render(&scene, &options, &AtomicBool::new(false), &|_| {})
-}
-
-fn sensor(origin: &str, target: &str, fov: f32, w: u32, h: u32) -> String {
-    format!(
-        r#"<sensor type="perspective"><float name="fov" value="{fov}"/>
-        <transform name="to_world"><lookat origin="{origin}" target="{target}" up="0, 1, 0"/></transform>
-        <film type="hdrfilm"><integer name="width" value="{w}"/><integer name="height" value="{h}"/>
-            <rfilter type="box"/></film></sensor>"#
-    )
-}
 
 #[test]
 fn toon_has_exactly_n_bands_on_a_sphere() {
@@ -46,9 +23,8 @@ fn toon_has_exactly_n_bands_on_a_sphere() {
             </scene>"#,
             sensor("0, 0, -4", "0, 0, 0", 35.0, 64, 64)
         );
-        let out = render_xml(&format!("toon{levels}"), &xml, 1);
-        let aovs = out.aovs.as_ref().unwrap();
-        let shape = &aovs.planes[aovs.names.iter().position(|n| n == "s.I").unwrap()];
+        let out = render_xml(&format!("npr-toon{levels}"), &xml, 1, 3);
+        let shape = aov_plane(&out, "s.I");
         let bands: BTreeSet<u32> = out
             .image
             .pixels
@@ -88,7 +64,7 @@ fn silhouette_lines_exactly_where_the_depth_jumps() {
         plane(10.0, 10.0, 2.0),
         plane(50.0, 0.0, 4.0)
     );
-    let out = render_xml("silhouette", &xml, 4);
+    let out = render_xml("npr-silhouette", &xml, 4, 3);
     let line = radia_math::Spectrum::new(1.0, 0.0, 0.0);
     let fill = radia_math::Spectrum::splat(0.5);
     for y in 0..30 {
@@ -113,10 +89,9 @@ fn toon_sphere(name: &str, fill: &str) -> (Vec<radia_math::Spectrum>, Vec<bool>)
         </scene>"#,
         sensor("0, 0, -4", "0, 0, 0", 35.0, 64, 64)
     );
-    let out = render_xml(name, &xml, 1);
-    let aovs = out.aovs.as_ref().unwrap();
-    let shape = &aovs.planes[aovs.names.iter().position(|n| n == "s.I").unwrap()];
-    (out.image.pixels, shape.iter().map(|&s| s == 1.0).collect())
+    let out = render_xml(name, &xml, 1, 3);
+    let on_sphere = aov_plane(&out, "s.I").iter().map(|&s| s == 1.0).collect();
+    (out.image.pixels, on_sphere)
 }
 
 #[test]
@@ -130,22 +105,36 @@ fn toon_ramp_maps_each_band_to_exactly_its_colour() {
     ];
     // The same samples with plain levels and a white sphere show band k as k/3 exactly,
     // which tells each pixel's band.
-    let (bands, on_sphere) = toon_sphere("ramp-levels", r#"<integer name="levels" value="4"/>"#);
+    let (bands, on_sphere) =
+        toon_sphere("npr-ramp-levels", r#"<integer name="levels" value="4"/>"#);
     let text = "0.05, 0.02, 0.2; 0.7 0.1 0.1; 0.2,0.9,0.3 ; 1, 1, 0.6";
-    let (image, _) = toon_sphere("ramp", &format!(r#"<string name="ramp" value="{text}"/>"#));
+    let (image, _) = toon_sphere(
+        "npr-ramp",
+        &format!(r#"<string name="ramp" value="{text}"/>"#),
+    );
     let mut seen = [0usize; 4];
     for (i, (&b, &p)) in bands.iter().zip(&image).enumerate() {
         if !on_sphere[i] {
             continue;
         }
         let k = (b.x * 3.0).round() as usize;
-        assert_eq!(b, Spectrum::splat(k as f32 / 3.0), "pixel {i} is not one band");
+        assert_eq!(
+            b,
+            Spectrum::splat(k as f32 / 3.0),
+            "pixel {i} is not one band"
+        );
         assert_eq!(p, ramp[k], "pixel {i} in band {k}");
         seen[k] += 1;
     }
-    assert!(seen.iter().all(|&n| n > 0), "every band on the sphere: {seen:?}");
+    assert!(
+        seen.iter().all(|&n| n > 0),
+        "every band on the sphere: {seen:?}"
+    );
     // A one-value colour is a grey.
-    let (image, on_sphere) = toon_sphere("ramp-grey", r#"<string name="ramp" value="0.25; 0.5"/>"#);
+    let (image, on_sphere) = toon_sphere(
+        "npr-ramp-grey",
+        r#"<string name="ramp" value="0.25; 0.5"/>"#,
+    );
     let greys: BTreeSet<u32> = image
         .iter()
         .zip(&on_sphere)
@@ -161,28 +150,50 @@ fn toon_ramp_maps_each_band_to_exactly_its_colour() {
 #[test]
 fn toon_ramp_errors_name_the_problem() {
     for (name, params, needle) in [
-        ("ramp-text", r#"<string name="ramp" value="0.1; red"/>"#, "colour 2 (\"red\") is not numbers"),
-        ("ramp-two", r#"<string name="ramp" value="0.1, 0.2"/>"#, "one grey value or three"),
-        ("ramp-neg", r#"<string name="ramp" value="0.1; -1"/>"#, "non-negative"),
-        ("ramp-empty", r#"<string name="ramp" value="0.1;;0.3"/>"#, "colour 2"),
+        (
+            "ramp-text",
+            r#"<string name="ramp" value="0.1; red"/>"#,
+            "colour 2 (\"red\") is not numbers",
+        ),
+        (
+            "ramp-two",
+            r#"<string name="ramp" value="0.1, 0.2"/>"#,
+            "one grey value or three",
+        ),
+        (
+            "ramp-neg",
+            r#"<string name="ramp" value="0.1; -1"/>"#,
+            "non-negative",
+        ),
+        (
+            "ramp-empty",
+            r#"<string name="ramp" value="0.1;;0.3"/>"#,
+            "colour 2",
+        ),
         (
             "ramp-levels",
             r#"<integer name="levels" value="3"/><string name="ramp" value="0; 1"/>"#,
             "\"levels\" is 3 but the ramp has 2 colours",
         ),
-        ("ramp-gooch", r#"<string name="style" value="gooch"/><string name="ramp" value="0; 1"/>"#, "\"ramp\""),
+        (
+            "ramp-gooch",
+            r#"<string name="style" value="gooch"/><string name="ramp" value="0; 1"/>"#,
+            "\"ramp\"",
+        ),
     ] {
-        let dir = std::env::temp_dir().join(format!("radia-npr-{}-{name}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("scene.xml");
         let xml = format!(
             r#"<scene version="3.0.0"><integrator type="npr">{params}</integrator>
             <shape type="sphere"/></scene>"#
         );
-        std::fs::write(&path, xml).unwrap();
-        let err = load_mitsuba_xml(&path, &[]).err().unwrap_or_else(|| panic!("{name} loaded"));
+        let path = write_scene(&format!("npr-{name}"), &xml);
+        let err = load_mitsuba_xml(&path, &[])
+            .err()
+            .unwrap_or_else(|| panic!("{name} loaded"));
         let text = err.to_string();
         assert!(text.contains(needle), "{name}: {text}");
-        assert!(text.contains("scene.xml") && err.line.is_some(), "{name}: {text}");
+        assert!(
+            text.contains("scene.xml") && err.line.is_some(),
+            "{name}: {text}"
+        );
     }
 }

@@ -1,0 +1,49 @@
+//! Set-up shared by the render crate's integration tests: a scene from XML text, rendered.
+
+#![allow(dead_code)] // each test binary uses its own part
+
+use radia_render::{render, RenderOptions, RenderOutput};
+use radia_sampling::SamplerKind;
+use radia_scene::{load_mitsuba_xml, Scene};
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+
+/// Writes `xml` as `scene.xml` in a fresh temporary folder named after `name` (so the
+/// tests of one binary, running at once, do not share files) and returns its path.
+pub fn write_scene(name: &str, xml: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("radia-render-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("scene.xml");
+    std::fs::write(&path, xml).unwrap();
+    path
+}
+
+/// Loads `xml` and renders it with the independent sampler at `spp` and `seed`.
+pub fn render_xml(name: &str, xml: &str, spp: u32, seed: u64) -> RenderOutput {
+    let path = write_scene(name, xml);
+    let scene = Scene::build(load_mitsuba_xml(&path, &[]).unwrap_or_else(|e| panic!("{e}")));
+    let options = RenderOptions {
+        spp,
+        seed,
+        sampler: SamplerKind::Independent,
+    };
+    render(&scene, &options, &AtomicBool::new(false), &|_| {})
+}
+
+/// A perspective sensor at `origin` looking at `target` (y up), `fov` degrees, a `w`×`h`
+/// film with a box filter (every sample lands in its own pixel).
+pub fn sensor(origin: &str, target: &str, fov: f32, w: u32, h: u32) -> String {
+    format!(
+        r#"<sensor type="perspective"><float name="fov" value="{fov}"/>
+        <transform name="to_world"><lookat origin="{origin}" target="{target}" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="{w}"/><integer name="height" value="{h}"/>
+            <rfilter type="box"/></film></sensor>"#
+    )
+}
+
+/// The developed AOV channel `name` (such as `s.I`) of a render.
+pub fn aov_plane<'a>(out: &'a RenderOutput, name: &str) -> &'a [f32] {
+    let aovs = out.aovs.as_ref().expect("the render has AOVs");
+    let i = aovs.names.iter().position(|n| n == name);
+    &aovs.planes[i.unwrap_or_else(|| panic!("no AOV channel {name} in {:?}", aovs.names))]
+}
