@@ -8,7 +8,7 @@
 //! Each AOV sample is taken at the same film position as the beauty sample (one extra
 //! closest-hit ray); the path integrator itself is not touched.
 
-use crate::film::Filter;
+use crate::film::{Filter, PixelRect};
 use glam::Vec2;
 use radia_math::Ray;
 use radia_scene::{AovDesc, AovKind, Scene};
@@ -180,24 +180,24 @@ impl AovFilm {
         }
     }
 
+    /// The pixels it covers.
+    pub fn rect(&self) -> PixelRect {
+        PixelRect {
+            x0: self.x0,
+            y0: self.y0,
+            width: self.width,
+            height: self.height,
+        }
+    }
+
     /// Adds another film's accumulations where the two overlap.
     pub fn merge(&mut self, other: &AovFilm) {
         let stride = self.stride();
-        for oy in 0..other.height as i32 {
-            let y = other.y0 + oy - self.y0;
-            if y < 0 || y >= self.height as i32 {
-                continue;
-            }
-            for ox in 0..other.width as i32 {
-                let x = other.x0 + ox - self.x0;
-                if x < 0 || x >= self.width as i32 {
-                    continue;
-                }
-                let src = (oy as usize * other.width as usize + ox as usize) * stride;
-                let dst = (y as usize * self.width as usize + x as usize) * stride;
-                for c in 0..stride {
-                    self.data[dst + c] += other.data[src + c];
-                }
+        for (src, dst) in self.rect().shared_pixels(other.rect()) {
+            let src = &other.data[src * stride..(src + 1) * stride];
+            let dst = &mut self.data[dst * stride..(dst + 1) * stride];
+            for (d, s) in dst.iter_mut().zip(src) {
+                *d += s;
             }
         }
     }

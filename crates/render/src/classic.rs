@@ -33,8 +33,9 @@
 //!   at the centroid with the face normal. Analytic shapes (sphere, disk) have no vertices
 //!   and are always shaded per hit.
 
+use crate::integrator::Integrator;
 use crate::path::PathStats;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use radia_bsdf::ShadingPoint;
 use radia_math::{Frame, Ray, Spectrum};
 use radia_sampling::{SampleStream, Sampler};
@@ -50,23 +51,25 @@ pub struct ClassicIntegrator<'a> {
 /// First sample dimension of the area-light choices (one 3-value block per light and bounce).
 const DIMS: u32 = 2;
 
+impl Integrator for ClassicIntegrator<'_> {
+    fn li<S: Sampler>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        _pos: Vec2,
+        sampler: &mut SampleStream<'_, S>,
+        stats: &mut PathStats,
+    ) -> Spectrum {
+        self.trace(scene, ray, 0, sampler, stats)
+    }
+}
+
 impl<'a> ClassicIntegrator<'a> {
     pub fn new(scene: &Scene, desc: &'a ClassicDesc) -> Self {
         Self {
             desc,
             max_depth: scene.integrator.max_depth.max(1) as u32,
         }
-    }
-
-    /// Radiance arriving at the camera along `ray`.
-    pub fn li<S: Sampler>(
-        &self,
-        scene: &Scene,
-        ray: Ray,
-        sampler: &mut SampleStream<'_, S>,
-        stats: &mut PathStats,
-    ) -> Spectrum {
-        self.trace(scene, ray, 0, sampler, stats)
     }
 
     fn trace<S: Sampler>(
@@ -93,7 +96,7 @@ impl<'a> ClassicIntegrator<'a> {
             if depth + 1 < self.max_depth {
                 let sp = si.shading_point();
                 for u1 in [0.0, 1.0 - f32::EPSILON] {
-                    let Some(bs) = bsdf.sample(&sp, si.wi, u1, glam::Vec2::ZERO) else {
+                    let Some(bs) = bsdf.sample(&sp, si.wi, u1, Vec2::ZERO) else {
                         continue;
                     };
                     if (u1 > 0.0 && bs.pdf >= 1.0) || bs.weight == Spectrum::ZERO {
@@ -130,7 +133,7 @@ impl<'a> ClassicIntegrator<'a> {
         let p = idx.map(|i| mesh.positions[i]);
         let uv = mesh.uvs.as_ref().map(|uvs| idx.map(|i| uvs[i]));
         // The vertex si sees `eye` from `at` with shading normal `n`.
-        let at = |at: Vec3, n: Vec3, uv: Option<glam::Vec2>| {
+        let at = |at: Vec3, n: Vec3, uv: Option<Vec2>| {
             let mut v = *si;
             v.p = at;
             v.frame = Frame::from_normal_tangent(n, si.dp_du);

@@ -59,6 +59,36 @@ impl Filter {
     }
 }
 
+/// A rectangle of pixels [x0, x0 + width) × [y0, y0 + height) of the full image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelRect {
+    pub x0: i32,
+    pub y0: i32,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl PixelRect {
+    /// The pixels `other` shares with this rectangle, as (index in `other`, index in this),
+    /// both row-major: where a tile's film is merged into the image's (every film's merge).
+    pub fn shared_pixels(self, other: PixelRect) -> impl Iterator<Item = (usize, usize)> {
+        (0..other.height as i32).flat_map(move |oy| {
+            let y = other.y0 + oy - self.y0;
+            let row_inside = y >= 0 && y < self.height as i32;
+            (0..other.width as i32).filter_map(move |ox| {
+                let x = other.x0 + ox - self.x0;
+                let inside = row_inside && x >= 0 && x < self.width as i32;
+                inside.then(|| {
+                    (
+                        oy as usize * other.width as usize + ox as usize,
+                        y as usize * self.width as usize + x as usize,
+                    )
+                })
+            })
+        })
+    }
+}
+
 /// A rectangle of accumulated (Σ w·L, Σ w) covering pixels [x0, x0 + width) × [y0, y0 + height).
 /// Tiles own a margin as wide as the filter radius and are merged in a fixed order, so the
 /// image does not depend on the thread count.
@@ -126,23 +156,22 @@ impl Film {
         }
     }
 
+    /// The pixels it covers.
+    pub fn rect(&self) -> PixelRect {
+        PixelRect {
+            x0: self.x0,
+            y0: self.y0,
+            width: self.width,
+            height: self.height,
+        }
+    }
+
     /// Adds another film's accumulations where the two overlap.
     pub fn merge(&mut self, other: &Film) {
-        for oy in 0..other.height as i32 {
-            let y = other.y0 + oy - self.y0;
-            if y < 0 || y >= self.height as i32 {
-                continue;
-            }
-            for ox in 0..other.width as i32 {
-                let x = other.x0 + ox - self.x0;
-                if x < 0 || x >= self.width as i32 {
-                    continue;
-                }
-                let src = other.data[(oy as u32 * other.width + ox as u32) as usize];
-                let dst = &mut self.data[(y as u32 * self.width + x as u32) as usize];
-                for c in 0..4 {
-                    dst[c] += src[c];
-                }
+        for (src, dst) in self.rect().shared_pixels(other.rect()) {
+            let (src, dst) = (other.data[src], &mut self.data[dst]);
+            for c in 0..4 {
+                dst[c] += src[c];
             }
         }
     }
@@ -202,6 +231,38 @@ impl Image {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn shared_pixels_are_the_overlap_of_two_rectangles() {
+        let image = PixelRect {
+            x0: 0,
+            y0: 0,
+            width: 5,
+            height: 4,
+        };
+        // A tile with a margin of 1 around pixels [3, 5) × [2, 4): 4×4 from (2, 1).
+        let tile = PixelRect {
+            x0: 2,
+            y0: 1,
+            width: 4,
+            height: 4,
+        };
+        let got: Vec<(usize, usize)> = image.shared_pixels(tile).collect();
+        let mut want = Vec::new();
+        for y in 1..4 {
+            for x in 2..5 {
+                want.push(((y - 1) * 4 + (x - 2), y * 5 + x));
+            }
+        }
+        assert_eq!(got, want);
+        let outside = PixelRect {
+            x0: -3,
+            y0: 0,
+            width: 2,
+            height: 2,
+        };
+        assert_eq!(image.shared_pixels(outside).count(), 0);
+    }
 
     #[test]
     fn gaussian_matches_mitsuba_shape() {

@@ -5,6 +5,7 @@ pub mod classic;
 pub mod npr;
 pub mod film;
 pub mod image_io;
+mod integrator;
 pub mod part;
 pub mod path;
 mod renderer;
@@ -12,6 +13,6 @@ mod renderer;
 pub use aov::AovLayers;
 pub use film::{Film, Image};
 pub use renderer::{
-    render, render_part, render_part_until, render_until, FilmOutput, RenderOptions, RenderOutput,
-    RenderStats, SampleRange, PASS_SPP,
+    render, render_part, render_part_until, render_part_with_aovs, render_until, FilmOutput,
+    RenderOptions, RenderOutput, RenderStats, SampleRange, PASS_SPP,
 };

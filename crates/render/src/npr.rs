@@ -32,9 +32,11 @@
 //!   (crease). Line samples take `line_color`; the film averages the samples of a pixel,
 //!   so the lines come out anti-aliased, with their width in pixels whatever the scene.
 
+use crate::integrator::Integrator;
 use crate::path::PathStats;
 use glam::Vec2;
 use radia_math::{Ray, Spectrum};
+use radia_sampling::{SampleStream, Sampler};
 use radia_scene::{NprDesc, NprStyle, Scene, SurfaceInteraction};
 
 pub struct NprIntegrator<'a> {
@@ -42,6 +44,31 @@ pub struct NprIntegrator<'a> {
     cos_crease: f32,
     /// The light: the first emitter that is not an environment.
     light: Option<u32>,
+}
+
+impl Integrator for NprIntegrator<'_> {
+    /// The colour of the camera sample at film position `pos` (pixels) whose ray is `ray`.
+    fn li<S: Sampler>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        pos: Vec2,
+        _sampler: &mut SampleStream<'_, S>,
+        stats: &mut PathStats,
+    ) -> Spectrum {
+        stats.rays += 1;
+        let hit = scene.intersect(&ray);
+        if self.desc.line_width > 0.0 && self.on_line(scene, hit.as_ref(), pos, stats) {
+            return self.desc.line_color;
+        }
+        let Some(si) = hit else {
+            return match scene.environment {
+                Some(env) => scene.emitters[env as usize].eval_environment(ray.d),
+                None => Spectrum::ZERO,
+            };
+        };
+        self.fill(scene, &si)
+    }
 }
 
 impl<'a> NprIntegrator<'a> {
@@ -55,22 +82,6 @@ impl<'a> NprIntegrator<'a> {
                 .position(|e| !e.is_environment())
                 .map(|i| i as u32),
         }
-    }
-
-    /// The colour of the camera sample at film position `pos` (pixels) whose ray is `ray`.
-    pub fn li(&self, scene: &Scene, ray: Ray, pos: Vec2, stats: &mut PathStats) -> Spectrum {
-        stats.rays += 1;
-        let hit = scene.intersect(&ray);
-        if self.desc.line_width > 0.0 && self.on_line(scene, hit.as_ref(), pos, stats) {
-            return self.desc.line_color;
-        }
-        let Some(si) = hit else {
-            return match scene.environment {
-                Some(env) => scene.emitters[env as usize].eval_environment(ray.d),
-                None => Spectrum::ZERO,
-            };
-        };
-        self.fill(scene, &si)
     }
 
     fn fill(&self, scene: &Scene, si: &SurfaceInteraction) -> Spectrum {

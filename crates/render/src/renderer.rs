@@ -14,11 +14,12 @@ use crate::aov::{AovFilm, AovIntegrator, AovLayers};
 use crate::classic::ClassicIntegrator;
 use crate::npr::NprIntegrator;
 use crate::film::{Film, Filter, Image};
+use crate::integrator::Integrator;
 use crate::path::{layout, PathIntegrator, PathStats};
 use glam::{UVec2, Vec2};
 use radia_math::{Ray, Spectrum};
 use radia_sampling::{with_sampler, AnySampler, PixelKey, SampleStream, Sampler, SamplerKind};
-use radia_scene::Scene;
+use radia_scene::{AovDesc, Scene};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
@@ -182,88 +183,67 @@ pub fn render_part_until(
     cancel: &AtomicBool,
     progress: &(dyn Fn(u64) + Sync),
 ) -> FilmOutput {
+    let aov = scene.integrator.aov.as_ref();
+    render_part_with_aovs(scene, options, aov, samples, deadline, cancel, progress)
+}
+
+/// [`render_part_until`] with the AOVs of `aov` instead of the scene's own `aov` integrator
+/// (the Python package's `render(..., aovs=...)` adds AOVs to a scene already built).
+pub fn render_part_with_aovs(
+    scene: &Scene,
+    options: &RenderOptions,
+    aov: Option<&AovDesc>,
+    samples: SampleRange,
+    deadline: Option<Instant>,
+    cancel: &AtomicBool,
+    progress: &(dyn Fn(u64) + Sync),
+) -> FilmOutput {
     let sampler = AnySampler::new(options.sampler, options.spp);
     let end = samples.end.min(sampler.sample_count());
-    let samples = SampleRange::new(samples.start.min(end), end);
-    macro_rules! go {
-        ($integrator:expr, $extras:expr) => {
-            with_sampler!(&sampler, s => {
-                render_with(scene, s, $integrator, $extras, options.seed, samples, deadline, cancel, progress)
-            })
-        };
-    }
-    let path = PathIntegrator::new(scene);
-    let classic = scene.integrator.classic.as_ref().map(|d| ClassicIntegrator::new(scene, d));
-    let npr = scene.integrator.npr.as_ref().map(|d| NprIntegrator::new(scene, d));
-    match (&scene.integrator.aov, &classic, &npr) {
-        (None, Some(c), _) => go!(c, &NoExtras).0,
-        (None, None, Some(n)) => go!(n, &NoExtras).0,
-        (None, None, None) => go!(&path, &NoExtras).0,
-        (Some(desc), classic, npr) => {
-            let aov = AovIntegrator::new(scene, desc);
-            let (mut out, film) = match (classic, npr) {
-                (Some(c), _) => go!(c, &aov),
-                (None, Some(n)) => go!(n, &aov),
-                (None, None) => go!(&path, &aov),
-            };
-            out.aovs = Some(film.0);
-            out
-        }
+    let job = Job {
+        scene,
+        sampler: &sampler,
+        seed: options.seed,
+        samples: SampleRange::new(samples.start.min(end), end),
+        deadline,
+        cancel,
+        progress,
+    };
+    let aov = aov.map(|d| AovIntegrator::new(scene, d));
+    let aov = aov.as_ref();
+    if let Some(desc) = &scene.integrator.classic {
+        job.run(&ClassicIntegrator::new(scene, desc), aov)
+    } else if let Some(desc) = &scene.integrator.npr {
+        job.run(&NprIntegrator::new(scene, desc), aov)
+    } else {
+        job.run(&PathIntegrator::new(scene), aov)
     }
 }
 
-/// The radiance estimate of one camera ray: the path tracer or another integrator, chosen
-/// once per render so that each compiles into its own tile loop.
-trait Integrator: Sync {
-    /// `pos` is the sample's film position in pixels (the NPR integrator traces its
-    /// neighbours' rays from it).
-    fn li<S: Sampler>(
-        &self,
-        scene: &Scene,
-        ray: Ray,
-        pos: Vec2,
-        sampler: &mut SampleStream<'_, S>,
-        stats: &mut PathStats,
-    ) -> Spectrum;
+/// One render's inputs beside the integrator and the extras, which it is generic over.
+struct Job<'a> {
+    scene: &'a Scene,
+    sampler: &'a AnySampler,
+    seed: u64,
+    /// Already clamped to the sampler's count.
+    samples: SampleRange,
+    deadline: Option<Instant>,
+    cancel: &'a AtomicBool,
+    progress: &'a (dyn Fn(u64) + Sync),
 }
 
-impl Integrator for PathIntegrator {
-    #[inline(always)]
-    fn li<S: Sampler>(
-        &self,
-        scene: &Scene,
-        ray: Ray,
-        _pos: Vec2,
-        sampler: &mut SampleStream<'_, S>,
-        stats: &mut PathStats,
-    ) -> Spectrum {
-        PathIntegrator::li(self, scene, ray, sampler, stats)
-    }
-}
-
-impl Integrator for ClassicIntegrator<'_> {
-    fn li<S: Sampler>(
-        &self,
-        scene: &Scene,
-        ray: Ray,
-        _pos: Vec2,
-        sampler: &mut SampleStream<'_, S>,
-        stats: &mut PathStats,
-    ) -> Spectrum {
-        ClassicIntegrator::li(self, scene, ray, sampler, stats)
-    }
-}
-
-impl Integrator for NprIntegrator<'_> {
-    fn li<S: Sampler>(
-        &self,
-        scene: &Scene,
-        ray: Ray,
-        pos: Vec2,
-        _sampler: &mut SampleStream<'_, S>,
-        stats: &mut PathStats,
-    ) -> Spectrum {
-        NprIntegrator::li(self, scene, ray, pos, stats)
+impl Job<'_> {
+    /// Renders with `integrator`, and the AOVs of `aov` when given: one tile loop per
+    /// (sampler, integrator, extras), chosen here once per render.
+    fn run<I: Integrator>(&self, integrator: &I, aov: Option<&AovIntegrator<'_>>) -> FilmOutput {
+        with_sampler!(self.sampler, s => match aov {
+            None => render_with(self, s, integrator, &NoExtras).0,
+            Some(aov) => {
+                let (mut out, (film, _)) = render_with(self, s, integrator, aov);
+                out.aovs = Some(film);
+                out
+            }
+        })
     }
 }
 
@@ -315,19 +295,22 @@ impl Extras for AovIntegrator<'_> {
     }
 }
 
-/// [`render`] with a concrete sampler, so that its calls inline into the path loop.
-#[allow(clippy::too_many_arguments)]
+/// The tile loop of `job` with a concrete sampler, so that its calls inline into the path loop.
 fn render_with<S: Sampler, I: Integrator, E: Extras>(
-    scene: &Scene,
+    job: &Job<'_>,
     sampler: &S,
     integrator: &I,
     extras: &E,
-    seed: u64,
-    samples: SampleRange,
-    deadline: Option<Instant>,
-    cancel: &AtomicBool,
-    progress: &(dyn Fn(u64) + Sync),
 ) -> (FilmOutput, E::Film) {
+    let Job {
+        scene,
+        seed,
+        samples,
+        deadline,
+        cancel,
+        progress,
+        ..
+    } = *job;
     let start = Instant::now();
     let mut passes = 0u32;
     let (w, h) = (scene.film.width, scene.film.height);
