@@ -14,9 +14,12 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict};
 use radia_render::film::develop_pixel;
 use radia_render::part::{self, Part, PartError, RenderIdentity};
-use radia_render::{image_io, render_part, FilmOutput, Image, RenderOptions, SampleRange};
+use radia_render::aov::AovFilm;
+use radia_render::{
+    image_io, render_part_with_aovs, AovLayers, FilmOutput, Image, RenderOptions, SampleRange,
+};
 use radia_scene::loader::load_mitsuba_xml_with_warnings;
-use radia_scene::{LightSamplerKind, Scene};
+use radia_scene::{parse_aovs, AovDesc, LightSamplerKind, Scene};
 use std::ffi::CString;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -175,12 +178,20 @@ fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
 /// linear RGB. With ``samples=(a, b)``: only the sample indices a..b (b excluded) of the
 /// ``spp`` of every pixel, as a :class:`Part` to :func:`merge` with the other ranges.
 ///
+/// With AOVs (``aovs="dd.y:depth,nn:sh_normal"``, Mitsuba's ``aov`` integrator string, as
+/// ``radia render --aov``; or a scene whose integrator is ``aov``): ``(image, layers)``, the
+/// image as above and a dict of float32 arrays (height, width, C), one per layer of the EXR
+/// the CLI writes, in its order and with its values, keyed by the channels' prefix: the
+/// nested integrator's layer (R, G, B, A) if the scene names one, then each AOV (``depth``:
+/// T; ``position``, normals, ``dp_du``, ``dp_dv``: X, Y, Z; ``uv``: U, V; ``albedo``: R, G,
+/// B; ids: I). AOVs are not split: ``samples`` is refused with them.
+///
 /// ``spp`` defaults to the scene's (rounded as its sampler requires, with a warning);
 /// ``seed`` is the seed of the sample sequences (0, as ``mi.render``); ``threads`` defaults to
 /// all cores. The GIL is released while rendering; Ctrl-C stops the render and raises
 /// ``KeyboardInterrupt``.
 #[pyfunction]
-#[pyo3(signature = (scene, spp=None, seed=0, threads=None, samples=None))]
+#[pyo3(signature = (scene, spp=None, seed=0, threads=None, samples=None, aovs=None))]
 fn render(
     py: Python<'_>,
     scene: &PyScene,
@@ -188,7 +199,29 @@ fn render(
     seed: u64,
     threads: Option<usize>,
     samples: Option<(u32, u32)>,
+    aovs: Option<&str>,
 ) -> PyResult<Py<PyAny>> {
+    let aov = match (aovs, &scene.scene.integrator.aov) {
+        (None, own) => own.clone(),
+        (Some(_), Some(_)) => {
+            return Err(PyValueError::new_err(format!(
+                "aovs: {}: the scene's integrator already is an aov integrator",
+                scene.path
+            )))
+        }
+        (Some(list), None) => Some(AovDesc {
+            outputs: parse_aovs(list).map_err(|e| PyValueError::new_err(format!("aovs: {e}")))?,
+            beauty_layer: None,
+            has_beauty: true,
+        }),
+    };
+    if aov.is_some() && samples.is_some() {
+        // Parts carry only the image's sums; refuse rather than drop the AOVs silently.
+        return Err(PyValueError::new_err(format!(
+            "samples: {}: split renders do not carry AOVs; render AOVs in one piece",
+            scene.path
+        )));
+    }
     let sampler = scene.scene.sampler.kind;
     let asked = spp.unwrap_or(scene.scene.sampler.sample_count).max(1);
     let options = RenderOptions {
@@ -225,10 +258,17 @@ fn render(
                 .map_err(|e| PyRuntimeError::new_err(format!("cannot start {n} threads: {e}")))?,
         ),
     };
-    let out = render_interruptibly(py, scene.scene.clone(), options, range, pool)?;
+    let out = render_interruptibly(py, scene.scene.clone(), options, range, aov.clone(), pool)?;
     let (w, h) = (scene.scene.film.width, scene.scene.film.height);
     if samples.is_none() {
-        return Ok(image_array(py, out.film.sums(), w, h)?.into_any().unbind());
+        let image = image_array(py, out.film.sums(), w, h)?;
+        return match (&aov, &out.aovs) {
+            (Some(desc), Some(film)) => {
+                let layers = aov_dict(py, desc, film, &out.film.develop())?;
+                Ok((image, layers).into_pyobject(py)?.into_any().unbind())
+            }
+            _ => Ok(image.into_any().unbind()),
+        };
     }
     let identity = RenderIdentity {
         scene: scene.fingerprint,
@@ -243,6 +283,40 @@ fn render(
     Ok(Py::new(py, PyPart { part })?.into_any())
 }
 
+/// The AOV layers ``render`` returns: one (height, width, C) array per layer of
+/// [`AovLayers`] (the channels `NAME.SUFFIX` grouped by NAME, in their order).
+fn aov_dict<'py>(
+    py: Python<'py>,
+    desc: &AovDesc,
+    film: &AovFilm,
+    developed: &Image,
+) -> PyResult<Bound<'py, PyDict>> {
+    let layers = AovLayers::new(desc, film, developed);
+    let (w, h) = (developed.width as usize, developed.height as usize);
+    let mut groups: Vec<(&str, Vec<&[f32]>)> = Vec::new();
+    for (name, plane) in layers.names.iter().zip(&layers.planes) {
+        let layer = name.rsplit_once('.').map_or(name.as_str(), |(l, _)| l);
+        match groups.iter_mut().find(|(l, _)| *l == layer) {
+            Some((_, planes)) => planes.push(plane),
+            None => groups.push((layer, vec![plane])),
+        }
+    }
+    let dict = PyDict::new(py);
+    for (layer, planes) in groups {
+        let c = planes.len();
+        let mut data = vec![0.0f32; w * h * c];
+        for (k, plane) in planes.iter().enumerate() {
+            for (i, v) in plane.iter().enumerate() {
+                data[i * c + k] = *v;
+            }
+        }
+        let array = Array3::from_shape_vec((h, w, c), data)
+            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        dict.set_item(layer, PyArray3::from_owned_array(py, array))?;
+    }
+    Ok(dict)
+}
+
 /// Runs the renderer on a thread of its own, the GIL released, checking for signals between
 /// waits (see the module comment).
 fn render_interruptibly(
@@ -250,6 +324,7 @@ fn render_interruptibly(
     scene: Arc<Scene>,
     options: RenderOptions,
     range: SampleRange,
+    aov: Option<AovDesc>,
     pool: Option<rayon::ThreadPool>,
 ) -> PyResult<FilmOutput> {
     let cancel = Arc::new(AtomicBool::new(false));
@@ -257,7 +332,10 @@ fn render_interruptibly(
     {
         let cancel = cancel.clone();
         std::thread::spawn(move || {
-            let run = || render_part(&scene, &options, range, &cancel, &|_| {});
+            let run = || {
+                let aov = aov.as_ref();
+                render_part_with_aovs(&scene, &options, aov, range, None, &cancel, &|_| {})
+            };
             let out = match pool {
                 Some(pool) => pool.install(run),
                 None => run(),

@@ -6,6 +6,10 @@ sample index and merge the parts exactly, write images.
     image = radia.render(scene, spp=64)             # float32 (64, 64, 3), linear RGB
     radia.write_image(image, "cornell.exr")
 
+    # AOVs (Mitsuba's aov integrator string): the image and a dict of layers.
+    image, layers = radia.render(scene, spp=16, aovs="dd.y:depth,nn:sh_normal")
+    depth, normals = layers["dd.y"][..., 0], layers["nn"]   # (64, 64), (64, 64, 3)
+
     # The same image from four pieces rendered anywhere (same seed, same spp):
     parts = [radia.render(scene, spp=64, samples=(a, a + 16)) for a in range(0, 64, 16)]
     same = radia.merge(parts).develop()             # == image up to float rounding

@@ -1,6 +1,6 @@
 """Type stubs of radia's native module (re-exported by ``radia``)."""
 from os import PathLike
-from typing import List, Optional, Sequence, Tuple, Union, overload
+from typing import Dict, List, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -92,16 +92,31 @@ def load_file(path: _Path, **defines: object) -> Scene:
 
 @overload
 def render(scene: Scene, spp: Optional[int] = None, seed: int = 0,
-           threads: Optional[int] = None, samples: None = None) -> _Image: ...
+           threads: Optional[int] = None, samples: None = None,
+           aovs: None = None) -> Union[_Image, Tuple[_Image, Dict[str, _Image]]]: ...
+@overload
+def render(scene: Scene, spp: Optional[int] = None, seed: int = 0,
+           threads: Optional[int] = None, samples: None = None, *,
+           aovs: str) -> Tuple[_Image, Dict[str, _Image]]: ...
 @overload
 def render(scene: Scene, spp: Optional[int] = None, seed: int = 0,
            threads: Optional[int] = None, *, samples: Tuple[int, int]) -> Part: ...
 def render(scene: Scene, spp: Optional[int] = None, seed: int = 0,
            threads: Optional[int] = None,
-           samples: Optional[Tuple[int, int]] = None) -> Union[_Image, Part]:
+           samples: Optional[Tuple[int, int]] = None,
+           aovs: Optional[str] = None
+           ) -> Union[_Image, Part, Tuple[_Image, Dict[str, _Image]]]:
     """Renders scene: a float32 (height, width, 3) linear RGB array; with samples=(a, b) only
     sample indices a..b of the spp of every pixel, as a Part. spp defaults to the scene's,
-    seed to 0, threads to all cores. Releases the GIL; Ctrl-C raises KeyboardInterrupt."""
+    seed to 0, threads to all cores. Releases the GIL; Ctrl-C raises KeyboardInterrupt.
+
+    With AOVs, aovs="dd.y:depth,nn:sh_normal" (Mitsuba's aov integrator string, as
+    `radia render --aov`) or a scene whose integrator is `aov`: (image, layers), layers a
+    dict of float32 (height, width, C) arrays keyed by layer name, in the EXR's order and
+    with its values: the nested integrator's layer (R, G, B, A) if the scene names one, then
+    each AOV (depth: T; position, normals, dp_du, dp_dv: X, Y, Z; uv: U, V; albedo: R, G, B;
+    prim_index, shape_index: I). Refused (ValueError) with samples, for a malformed string,
+    and when the scene already has an aov integrator."""
 
 def write_image(array: npt.ArrayLike, path: _Path) -> None:
     """Writes a float32 (height, width, 3) linear RGB array as EXR or PNG (by extension)."""
