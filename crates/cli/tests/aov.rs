@@ -3,22 +3,12 @@
 //! output are refused with a clear error rather than dropping the AOVs.
 //! (Parity of the values with Mitsuba: validation/compare_aov.py.)
 
+mod common;
+
+use common::{assert_clean_failure, assert_success, temp_dir, write_scene};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn radia(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_radia"))
-        .args(args)
-        .output()
-        .expect("radia runs")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("radia-aov-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use std::process::Output;
 
 /// A unit sphere at the origin seen from z = −4 along +z, 25×17 pixels, box filter.
 fn scene(integrator: &str) -> String {
@@ -63,42 +53,28 @@ fn channels(path: &Path) -> BTreeMap<String, Vec<f32>> {
     out
 }
 
+/// Renders `xml` (written into `dir`) to `dir/out` with `extra` arguments.
 fn render(dir: &Path, xml: &str, out: &str, extra: &[&str]) -> (Output, PathBuf) {
-    let path = dir.join("scene.xml");
-    std::fs::write(&path, xml).unwrap();
     let out_path = dir.join(out);
-    let mut args = vec![
-        "render",
-        path.to_str().unwrap(),
-        "-o",
-        out_path.to_str().unwrap(),
-        "-q",
-    ];
-    args.extend_from_slice(extra);
-    (radia(&args), out_path)
+    (
+        common::render(&write_scene(dir, xml), &out_path, extra),
+        out_path,
+    )
 }
 
 #[test]
 fn aov_flag_adds_mitsuba_named_channels_and_leaves_the_image_alone() {
-    let dir = temp_dir("flag");
+    let dir = temp_dir("aov-flag");
     let xml = scene("");
     let (plain, plain_path) = render(&dir, &xml, "plain.exr", &[]);
-    assert!(
-        plain.status.success(),
-        "{}",
-        String::from_utf8_lossy(&plain.stderr)
-    );
+    assert_success(&plain);
     let (out, path) = render(
         &dir,
         &xml,
         "aov.exr",
         &["--aov", "dd.y:depth,nn:sh_normal,a:albedo,s:shape_index"],
     );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let ch = channels(&path);
     let names: Vec<&str> = ch.keys().map(String::as_str).collect();
     assert_eq!(
@@ -128,18 +104,14 @@ fn aov_flag_adds_mitsuba_named_channels_and_leaves_the_image_alone() {
 
 #[test]
 fn aov_integrator_writes_the_nested_image_as_its_layer() {
-    let dir = temp_dir("xml");
+    let dir = temp_dir("aov-xml");
     let xml = scene(
         r#"<integrator type="aov"><string name="aovs" value="p:position"/>
                <integrator type="path" name="my_image"><integer name="max_depth" value="3"/></integrator>
            </integrator>"#,
     );
     let (out, path) = render(&dir, &xml, "aov.exr", &[]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let ch = channels(&path);
     let names: Vec<&str> = ch.keys().map(String::as_str).collect();
     assert_eq!(
@@ -170,7 +142,7 @@ fn aov_integrator_writes_the_nested_image_as_its_layer() {
 
 #[test]
 fn aovs_refuse_split_renders_and_png() {
-    let dir = temp_dir("refuse");
+    let dir = temp_dir("aov-refuse");
     let xml = scene("");
     for (out_name, extra, needle) in [
         (
@@ -186,9 +158,7 @@ fn aovs_refuse_split_renders_and_png() {
         ),
     ] {
         let (out, path) = render(&dir, &xml, out_name, &extra);
-        let stderr = String::from_utf8_lossy(&out.stderr).to_lowercase();
-        assert!(!out.status.success(), "{extra:?}");
-        assert_ne!(out.status.code(), Some(101), "{extra:?} panicked: {stderr}");
+        let stderr = assert_clean_failure(&out, &format!("{extra:?}")).to_lowercase();
         assert!(stderr.contains(needle), "{extra:?}: {stderr}");
         assert!(!path.exists());
     }

@@ -2,21 +2,10 @@
 //! non-zero exit without a panic or an output file; a good scene renders; thread count does
 //! not change the image.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn radia(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_radia"))
-        .args(args)
-        .output()
-        .expect("radia runs")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("radia-cli-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use common::{assert_clean_failure, assert_success, radia, render, temp_dir, write_scene};
+use std::path::Path;
 
 const GOOD_SCENE: &str = r#"<scene version="3.0.0">
     <default name="spp" value="4"/>
@@ -40,24 +29,9 @@ const GOOD_SCENE: &str = r#"<scene version="3.0.0">
 /// Runs radia on a broken scene; checks the error names the file and line, and no image.
 fn expect_error(name: &str, scene: &str, line: u32, needle: &str) {
     let dir = temp_dir(name);
-    let path = dir.join("scene.xml");
-    std::fs::write(&path, scene).unwrap();
+    let path = write_scene(&dir, scene);
     let out_path = dir.join("out.exr");
-    let out = radia(&[
-        "render",
-        path.to_str().unwrap(),
-        "-o",
-        out_path.to_str().unwrap(),
-        "-q",
-    ]);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        !out.status.success(),
-        "{name}: exit status {:?}",
-        out.status
-    );
-    assert_ne!(out.status.code(), Some(101), "{name}: panicked: {stderr}");
-    assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+    let stderr = assert_clean_failure(&render(&path, &out_path, &[]), name);
     let location = format!("{}:{line}", path.display());
     assert!(
         stderr.contains(&location),
@@ -109,38 +83,23 @@ fn unsupported_element_names_file_and_line() {
 
 #[test]
 fn missing_scene_file_is_an_error() {
-    let out = radia(&[
-        "render",
-        "/nonexistent/scene.xml",
-        "-o",
-        "/tmp/never.exr",
-        "-q",
-    ]);
-    assert!(!out.status.success());
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let out = render(
+        Path::new("/nonexistent/scene.xml"),
+        Path::new("/tmp/never.exr"),
+        &[],
+    );
+    let stderr = assert_clean_failure(&out, "missing scene");
     assert!(stderr.contains("/nonexistent/scene.xml"), "{stderr}");
-    assert!(!stderr.contains("panicked"));
 }
 
 #[test]
 fn renders_png_and_exr() {
     let dir = temp_dir("good");
-    let path = dir.join("scene.xml");
-    std::fs::write(&path, GOOD_SCENE).unwrap();
+    let path = write_scene(&dir, GOOD_SCENE);
     for ext in ["exr", "png"] {
         let out_path = dir.join(format!("out.{ext}"));
-        let out = radia(&[
-            "render",
-            path.to_str().unwrap(),
-            "-o",
-            out_path.to_str().unwrap(),
-            "-q",
-        ]);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let out = render(&path, &out_path, &[]);
+        assert_success(&out);
         assert!(std::fs::metadata(&out_path).unwrap().len() > 0);
         let stdout = String::from_utf8_lossy(&out.stdout);
         assert!(
@@ -153,63 +112,28 @@ fn renders_png_and_exr() {
 #[test]
 fn thread_count_does_not_change_the_image() {
     let dir = temp_dir("threads");
-    let path = dir.join("scene.xml");
-    std::fs::write(&path, GOOD_SCENE).unwrap();
+    let path = write_scene(&dir, GOOD_SCENE);
     let mut images = Vec::new();
     for threads in ["1", "2", "3"] {
         let out_path = dir.join(format!("t{threads}.exr"));
-        let out = radia(&[
-            "render",
-            path.to_str().unwrap(),
-            "-o",
-            out_path.to_str().unwrap(),
-            "-q",
-            "--threads",
-            threads,
-            "--spp",
-            "20",
-            "--seed",
-            "7",
-        ]);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let extra = ["--threads", threads, "--spp", "20", "--seed", "7"];
+        assert_success(&render(&path, &out_path, &extra));
         images.push(std::fs::read(&out_path).unwrap());
     }
     assert_eq!(images[0], images[1], "1 vs 2 threads");
     assert_eq!(images[0], images[2], "1 vs 3 threads");
     // A different seed gives a different image.
     let other = dir.join("seed8.exr");
-    radia(&[
-        "render",
-        path.to_str().unwrap(),
-        "-o",
-        other.to_str().unwrap(),
-        "-q",
-        "--spp",
-        "20",
-        "--seed",
-        "8",
-    ]);
+    render(&path, &other, &["--spp", "20", "--seed", "8"]);
     assert_ne!(std::fs::read(other).unwrap(), images[0]);
 }
 
 #[test]
 fn bad_output_extension_is_an_error() {
     let dir = temp_dir("ext");
-    let path = dir.join("scene.xml");
-    std::fs::write(&path, GOOD_SCENE).unwrap();
-    let out = radia(&[
-        "render",
-        path.to_str().unwrap(),
-        "-o",
-        dir.join("x.jpg").to_str().unwrap(),
-        "-q",
-    ]);
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("x.jpg"));
+    let path = write_scene(&dir, GOOD_SCENE);
+    let out = render(&path, &dir.join("x.jpg"), &[]);
+    assert!(assert_clean_failure(&out, "x.jpg").contains("x.jpg"));
 }
 
 /// A one-triangle glTF (its buffer a data URI) facing +z, seen by the default camera under
@@ -232,47 +156,24 @@ fn renders_a_gltf_file_by_its_extension() {
     let path = dir.join("triangle.gltf");
     std::fs::write(&path, TRIANGLE_GLTF).unwrap();
     let out_path = dir.join("triangle.exr");
-    let out = radia(&[
-        "render",
-        path.to_str().unwrap(),
-        "-o",
-        out_path.to_str().unwrap(),
-        "--resolution",
-        "16x12",
-        "--spp",
-        "4",
-        "-q",
-    ]);
+    let out = render(&path, &out_path, &["--resolution", "16x12", "--spp", "4"]);
+    assert_success(&out);
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("16x12"), "{stderr}");
     assert!(out_path.exists());
 
     // --camera names a camera the file does not have: an error naming the file.
-    let out = radia(&[
-        "render",
-        path.to_str().unwrap(),
-        "-o",
-        out_path.to_str().unwrap(),
-        "--camera",
-        "2",
-        "-q",
-    ]);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        !out.status.success() && out.status.code() != Some(101),
-        "{stderr}"
-    );
+    let out = render(&path, &out_path, &["--camera", "2"]);
+    let stderr = assert_clean_failure(&out, "--camera 2");
     assert!(
         stderr.contains("triangle.gltf") && stderr.contains("there is no camera 2"),
         "{stderr}"
     );
     // glTF-only options on an XML scene are refused.
-    let xml = dir.join("scene.xml");
-    std::fs::write(&xml, GOOD_SCENE).unwrap();
+    let xml = write_scene(&dir, GOOD_SCENE);
     let out = radia(&["render", xml.to_str().unwrap(), "--environment", "1", "-q"]);
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--environment applies to glTF"));
+    let stderr = assert_clean_failure(&out, "--environment on XML");
+    assert!(stderr.contains("--environment applies to glTF"), "{stderr}");
 }
 
 #[test]
@@ -303,16 +204,7 @@ fn malformed_gltf_is_an_error_not_a_panic() {
     ] {
         let path = dir.join(name);
         std::fs::write(&path, body).unwrap();
-        let out = radia(&[
-            "render",
-            path.to_str().unwrap(),
-            "-o",
-            out_path.to_str().unwrap(),
-            "-q",
-        ]);
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success(), "{name}: {stderr}");
-        assert_ne!(out.status.code(), Some(101), "{name}: panicked: {stderr}");
+        let stderr = assert_clean_failure(&render(&path, &out_path, &[]), name);
         assert!(
             stderr.contains(name) && stderr.contains(needle),
             "{name}: {stderr}"
