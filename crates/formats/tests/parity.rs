@@ -111,39 +111,48 @@ fn write_xml(dir: &Path) -> std::path::PathBuf {
 fn render_file(path: &Path) -> Vec<Vec3> {
     let mut options = SceneOptions::default();
     options.gltf.resolution = Some((W, H));
-    let mut desc = load_scene(path, &options).unwrap_or_else(|e| panic!("{e}"));
-    desc.film.filter = FilterDesc::Box;
-    let scene = Scene::build(desc);
-    assert_eq!((scene.film.width, scene.film.height), (W, H));
-    let out = render(
-        &scene,
-        &RenderOptions {
-            spp: SPP,
-            seed: 7,
-            sampler: SamplerKind::Independent,
-        },
-        &AtomicBool::new(false),
-        &|_| {},
-    );
-    out.image.pixels
+    render_loaded(path, &options, (W, H), SPP, 7)
 }
 
-/// The largest relative difference between means over 8×8-pixel blocks, and the relative
-/// difference of the image means.
-fn differences(a: &[Vec3], b: &[Vec3]) -> (f32, f32) {
+/// Loads `path` with `options`, checks its film is `size`, and renders it with a box filter
+/// and the independent sampler.
+fn render_loaded(
+    path: &Path,
+    options: &SceneOptions,
+    size: (u32, u32),
+    spp: u32,
+    seed: u64,
+) -> Vec<Vec3> {
+    let mut desc = load_scene(path, options).unwrap_or_else(|e| panic!("{e}"));
+    desc.film.filter = FilterDesc::Box;
+    let scene = Scene::build(desc);
+    assert_eq!((scene.film.width, scene.film.height), size);
+    let options = RenderOptions {
+        spp,
+        seed,
+        sampler: SamplerKind::Independent,
+    };
+    render(&scene, &options, &AtomicBool::new(false), &|_| {})
+        .image
+        .pixels
+}
+
+/// The largest relative difference between means over 8×8-pixel blocks (sum of channels)
+/// of two `w`×`h` images, and the relative difference of the image means.
+fn differences(a: &[Vec3], b: &[Vec3], (w, h): (u32, u32)) -> (f32, f32) {
     let block = |img: &[Vec3], bx: u32, by: u32| {
         let mut s = 0.0f64;
         for y in by * 8..(by + 1) * 8 {
             for x in bx * 8..(bx + 1) * 8 {
-                let p = img[(y * W + x) as usize];
+                let p = img[(y * w + x) as usize];
                 s += (p.x + p.y + p.z) as f64;
             }
         }
         s
     };
     let mut worst = 0.0f32;
-    for by in 0..H / 8 {
-        for bx in 0..W / 8 {
+    for by in 0..h / 8 {
+        for bx in 0..w / 8 {
             let (sa, sb) = (block(a, bx, by), block(b, bx, by));
             let rel = ((sa - sb).abs() / sa.max(sb).max(1e-3)) as f32;
             worst = worst.max(rel);
@@ -165,7 +174,7 @@ fn gltf_and_equivalent_xml_render_the_same() {
         lit > (W * H / 2) as usize,
         "the scene is mostly dark: {lit} lit pixels"
     );
-    let (block, mean) = differences(&xml, &gltf);
+    let (block, mean) = differences(&xml, &gltf, (W, H));
     println!("glTF vs XML: worst 8x8 block {block:.4}, image mean {mean:.5}");
     assert!(
         block < 0.03 && mean < 0.005,
@@ -174,7 +183,7 @@ fn gltf_and_equivalent_xml_render_the_same() {
 
     // The comparison sees a 10 % brighter point light.
     let brighter = render_file(&write_gltf(&dir, 22.0));
-    let (block, mean) = differences(&xml, &brighter);
+    let (block, mean) = differences(&xml, &brighter, (W, H));
     println!("glTF with a 10% brighter point light vs XML: worst block {block:.4}, mean {mean:.5}");
     assert!(
         block > 0.03 || mean > 0.005,
@@ -192,46 +201,7 @@ fn render_square(path: &Path, res: u32, spp: u32, defines: &[(&str, &str)]) -> V
     if path.extension().is_some_and(|e| e == "xml") {
         options.defines.push(("res".into(), res.to_string()));
     }
-    let mut desc = load_scene(path, &options).unwrap_or_else(|e| panic!("{e}"));
-    desc.film.filter = FilterDesc::Box;
-    let scene = Scene::build(desc);
-    assert_eq!((scene.film.width, scene.film.height), (res, res));
-    let out = render(
-        &scene,
-        &RenderOptions {
-            spp,
-            seed: 3,
-            sampler: SamplerKind::Independent,
-        },
-        &AtomicBool::new(false),
-        &|_| {},
-    );
-    out.image.pixels
-}
-
-/// The worst relative difference of 8×8-block means (sum of channels) and of the images'
-/// means, for `res`² images.
-fn square_differences(a: &[Vec3], b: &[Vec3], res: u32) -> (f32, f32) {
-    let sum = |img: &[Vec3], bx: u32, by: u32| {
-        let mut s = 0.0f64;
-        for y in by * 8..(by + 1) * 8 {
-            for x in bx * 8..(bx + 1) * 8 {
-                let p = img[(y * res + x) as usize];
-                s += (p.x + p.y + p.z) as f64;
-            }
-        }
-        s
-    };
-    let mut worst = 0.0f32;
-    for by in 0..res / 8 {
-        for bx in 0..res / 8 {
-            let (sa, sb) = (sum(a, bx, by), sum(b, bx, by));
-            worst = worst.max(((sa - sb).abs() / sa.max(sb).max(1e-3)) as f32);
-        }
-    }
-    let mean = |img: &[Vec3]| img.iter().map(|p| (p.x + p.y + p.z) as f64).sum::<f64>();
-    let (ma, mb) = (mean(a), mean(b));
-    (worst, ((ma - mb).abs() / ma.max(mb)) as f32)
+    render_loaded(path, &options, (res, res), spp, 3)
 }
 
 /// The three glTF scenes of `scenes/gltf/` (written by the `write_parity_scenes` example,
@@ -251,7 +221,7 @@ fn scene_files_render_as_their_xml_twins() {
             lit > (RES * RES / 3) as usize,
             "{name}: mostly dark ({lit} lit pixels)"
         );
-        let (block, mean) = square_differences(&gltf, &xml, RES);
+        let (block, mean) = differences(&gltf, &xml, (RES, RES));
         println!("{name}: glTF vs XML: worst 8x8 block {block:.4}, image mean {mean:.5}");
         assert!(
             block < 0.03 && mean < 0.005,
@@ -266,7 +236,7 @@ fn scene_files_render_as_their_xml_twins() {
         32,
         &[("checker_filter", "bilinear")],
     );
-    let (block, mean) = square_differences(&gltf, &xml, RES);
+    let (block, mean) = differences(&gltf, &xml, (RES, RES));
     println!("textured with a bilinear checker: worst block {block:.4}, mean {mean:.5}");
     assert!(block > 0.03, "a bilinear checker went unnoticed: {block}");
 }

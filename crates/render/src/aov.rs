@@ -182,12 +182,7 @@ impl AovFilm {
 
     /// The pixels it covers.
     pub fn rect(&self) -> PixelRect {
-        PixelRect {
-            x0: self.x0,
-            y0: self.y0,
-            width: self.width,
-            height: self.height,
-        }
+        PixelRect::new(self.x0, self.y0, self.width, self.height)
     }
 
     /// Adds another film's accumulations where the two overlap.

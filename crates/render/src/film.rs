@@ -69,6 +69,15 @@ pub struct PixelRect {
 }
 
 impl PixelRect {
+    pub const fn new(x0: i32, y0: i32, width: u32, height: u32) -> Self {
+        Self {
+            x0,
+            y0,
+            width,
+            height,
+        }
+    }
+
     /// The pixels `other` shares with this rectangle, as (index in `other`, index in this),
     /// both row-major: where a tile's film is merged into the image's (every film's merge).
     pub fn shared_pixels(self, other: PixelRect) -> impl Iterator<Item = (usize, usize)> {
@@ -158,12 +167,7 @@ impl Film {
 
     /// The pixels it covers.
     pub fn rect(&self) -> PixelRect {
-        PixelRect {
-            x0: self.x0,
-            y0: self.y0,
-            width: self.width,
-            height: self.height,
-        }
+        PixelRect::new(self.x0, self.y0, self.width, self.height)
     }
 
     /// Adds another film's accumulations where the two overlap.
