@@ -207,11 +207,7 @@ impl<'a> ClassicIntegrator<'a> {
                 e *= d * d / (a + b * d + c * d * d);
             }
             if self.desc.shadows {
-                let shadow = if es.dist.is_finite() {
-                    si.spawn_ray_to_surface(es.p, es.n, es.p_error)
-                } else {
-                    si.spawn_ray_towards_infinity(es.d)
-                };
+                let shadow = si.shadow_ray(&es);
                 stats.rays += 1;
                 if scene.occluded(&shadow) {
                     continue;

@@ -235,11 +235,7 @@ impl PathIntegrator {
         if f == Spectrum::ZERO {
             return Spectrum::ZERO;
         }
-        let shadow = if es.dist.is_finite() {
-            si.spawn_ray_to_surface(es.p, es.n, es.p_error)
-        } else {
-            si.spawn_ray_towards_infinity(es.d)
-        };
+        let shadow = si.shadow_ray(&es);
         stats.rays += 1;
         if scene.occluded(&shadow) {
             return Spectrum::ZERO;

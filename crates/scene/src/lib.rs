@@ -211,6 +211,17 @@ impl SurfaceInteraction {
         shadow_ray(o, t)
     }
 
+    /// The shadow ray of the emitter sample `es` taken from this point: to the sampled point
+    /// of a surface ([`Self::spawn_ray_to_surface`]), or along `es.d` for lights at infinity.
+    #[inline]
+    pub fn shadow_ray(&self, es: &EmitterSample) -> Ray {
+        if es.dist.is_finite() {
+            self.spawn_ray_to_surface(es.p, es.n, es.p_error)
+        } else {
+            self.spawn_ray_towards_infinity(es.d)
+        }
+    }
+
     /// A shadow ray in direction `d` towards something at infinity.
     #[inline]
     pub fn spawn_ray_towards_infinity(&self, d: Vec3) -> Ray {
@@ -258,7 +269,11 @@ mod tests {
                 } else {
                     x
                 };
-                assert_eq!(step_away(x, o).to_bits(), want.to_bits(), "x {x:e}, o {o:e}");
+                assert_eq!(
+                    step_away(x, o).to_bits(),
+                    want.to_bits(),
+                    "x {x:e}, o {o:e}"
+                );
             }
         }
     }
