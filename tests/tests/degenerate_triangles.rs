@@ -11,8 +11,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 fn temp_dir(name: &str) -> PathBuf {
-    let dir =
-        std::env::temp_dir().join(format!("radia-degenerate-{}-{name}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("radia-degenerate-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
@@ -43,7 +42,14 @@ const VERTICES: [[f32; 3]; 7] = [
     [0.75, 0.75, 0.0],
 ];
 /// The good triangle, a sliver, then four degenerate ones.
-const FACES: [[u32; 3]; 6] = [[0, 1, 2], [0, 1, 4], [0, 0, 2], [1, 1, 1], [0, 1, 3], [0, 5, 6]];
+const FACES: [[u32; 3]; 6] = [
+    [0, 1, 2],
+    [0, 1, 4],
+    [0, 0, 2],
+    [1, 1, 1],
+    [0, 1, 3],
+    [0, 5, 6],
+];
 
 fn obj_text() -> String {
     let mut s = String::new();
@@ -75,9 +81,14 @@ fn load(dir: &Path, plugin: &str, file: &str, text: &str) -> Result<(Scene, Vec<
     std::fs::write(dir.join(file), text).unwrap();
     let scene = dir.join(format!("{file}.xml"));
     std::fs::write(&scene, scene_xml(plugin, file)).unwrap();
-    let (desc, warnings) = load_mitsuba_xml_with_warnings(&scene, &[]).map_err(|e| e.to_string())?;
+    let (desc, warnings) =
+        load_mitsuba_xml_with_warnings(&scene, &[]).map_err(|e| e.to_string())?;
     match &desc.shapes[0].geometry {
-        Geometry::Mesh(m) => assert_eq!(m.indices.len(), 2, "{file}: the good triangle and the sliver stay"),
+        Geometry::Mesh(m) => assert_eq!(
+            m.indices.len(),
+            2,
+            "{file}: the good triangle and the sliver stay"
+        ),
         _ => panic!("not a mesh"),
     }
     Ok((Scene::build(desc), warnings))
@@ -90,19 +101,28 @@ fn degenerate_triangles_are_dropped_with_one_counting_warning() {
         let (scene, warnings) = load(&dir, plugin, file, &text).unwrap();
         assert_eq!(warnings.len(), 1, "{file}: {warnings:?}");
         assert!(
-            warnings[0].contains(&format!("\"{file}\": dropped 4 degenerate (zero-area) triangle(s)")),
+            warnings[0].contains(&format!(
+                "\"{file}\": dropped 4 degenerate (zero-area) triangle(s)"
+            )),
             "{warnings:?}"
         );
         let out = render(
             &scene,
-            &RenderOptions { spp: 64, seed: 0, sampler: SamplerKind::Independent },
+            &RenderOptions {
+                spp: 64,
+                seed: 0,
+                sampler: SamplerKind::Independent,
+            },
             &AtomicBool::new(false),
             &|_| {},
         );
         assert_eq!(out.stats.invalid_samples, 0, "{file}: NaN or Inf samples");
         assert!(out.image.pixels.iter().all(|p| p.is_finite()));
         // The triangle is seen: some pixels are darker than the unit environment.
-        assert!(out.image.pixels.iter().any(|p| p.x < 0.9), "{file}: the mesh is not visible");
+        assert!(
+            out.image.pixels.iter().any(|p| p.x < 0.9),
+            "{file}: the mesh is not visible"
+        );
     }
     let _ = std::fs::remove_dir_all(dir);
 }
@@ -113,10 +133,16 @@ fn non_finite_coordinates_are_refused_naming_the_file() {
     for bad in ["nan", "inf", "-inf", "1e39"] {
         let obj = obj_text().replacen("v 1 0 0", &format!("v 1 {bad} 0"), 1);
         let e = load(&dir, "obj", "bad.obj", &obj).err().expect("refused");
-        assert!(e.contains("bad.obj:2: the mesh contains invalid (non-finite) vertex position data"), "{bad}: {e}");
+        assert!(
+            e.contains("bad.obj:2: the mesh contains invalid (non-finite) vertex position data"),
+            "{bad}: {e}"
+        );
         let ply = ply_text().replacen("\n1 0 0\n", &format!("\n1 {bad} 0\n"), 1);
         let e = load(&dir, "ply", "bad.ply", &ply).err().expect("refused");
-        assert!(e.contains("bad.ply: the mesh contains invalid (non-finite) vertex position data"), "{bad}: {e}");
+        assert!(
+            e.contains("bad.ply: the mesh contains invalid (non-finite) vertex position data"),
+            "{bad}: {e}"
+        );
     }
     let _ = std::fs::remove_dir_all(dir);
 }

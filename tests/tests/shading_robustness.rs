@@ -34,9 +34,15 @@ fn scene_xml(bsdf: &str, camera_y: f32) -> String {
 fn materials() -> Vec<String> {
     let mut m = Vec::new();
     for ior in ["1.0001", "4"] {
-        m.push(format!(r#"<bsdf type="dielectric"><float name="int_ior" value="{ior}"/></bsdf>"#));
-        m.push(format!(r#"<bsdf type="thindielectric"><float name="int_ior" value="{ior}"/></bsdf>"#));
-        m.push(format!(r#"<bsdf type="plastic"><float name="int_ior" value="{ior}"/></bsdf>"#));
+        m.push(format!(
+            r#"<bsdf type="dielectric"><float name="int_ior" value="{ior}"/></bsdf>"#
+        ));
+        m.push(format!(
+            r#"<bsdf type="thindielectric"><float name="int_ior" value="{ior}"/></bsdf>"#
+        ));
+        m.push(format!(
+            r#"<bsdf type="plastic"><float name="int_ior" value="{ior}"/></bsdf>"#
+        ));
         for alpha in ["0", "0.0001", "1"] {
             for dist in ["beckmann", "ggx"] {
                 let rough = format!(
@@ -83,7 +89,10 @@ fn check_bsdf(xml: &str, bsdf: &Bsdf) {
     for &wi in &dirs {
         for &wo in &dirs {
             let (f, pdf) = bsdf.eval_pdf(&sp, wi, wo);
-            assert!(f.is_finite() && pdf.is_finite(), "{xml}: eval({wi}, {wo}) = {f}, pdf {pdf}");
+            assert!(
+                f.is_finite() && pdf.is_finite(),
+                "{xml}: eval({wi}, {wo}) = {f}, pdf {pdf}"
+            );
         }
         for i in 0..64 {
             let u1 = (i as f32 + 0.5) / 64.0;
@@ -108,7 +117,11 @@ fn extreme_materials_stay_finite_in_bsdf_queries_and_grazing_renders() {
         check_bsdf(&xml, &scene.bsdfs[0]);
         let out = render(
             &scene,
-            &RenderOptions { spp: 4, seed: 0, sampler: SamplerKind::Independent },
+            &RenderOptions {
+                spp: 4,
+                seed: 0,
+                sampler: SamplerKind::Independent,
+            },
             &AtomicBool::new(false),
             &|_| {},
         );

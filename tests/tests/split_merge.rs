@@ -163,9 +163,17 @@ fn merge_refuses_parts_of_other_renders_and_overlaps() {
     let err = merge(vec![a.clone(), b]).unwrap_err().to_string();
     assert!(err.contains("scenes differ"), "{err}");
 
-    let c = part(&scene, &identity(&desc, sampler, 2), sampler, SampleRange::new(16, 32));
+    let c = part(
+        &scene,
+        &identity(&desc, sampler, 2),
+        sampler,
+        SampleRange::new(16, 32),
+    );
     let err = merge(vec![a.clone(), c]).unwrap_err().to_string();
-    assert!(err.contains("seeds differ") && err.contains("1 in 0..16"), "{err}");
+    assert!(
+        err.contains("seeds differ") && err.contains("1 in 0..16"),
+        "{err}"
+    );
 
     let mut spp_id = id.clone();
     spp_id.spp = 128;

@@ -7,13 +7,13 @@
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use radia_formats::{load_scene, GltfOptions, SceneFormat, SceneOptions};
 use radia_render::part::{read_part, write_part, Merger, Part, RenderIdentity};
 use radia_render::{
     image_io::{write_image, write_image_with_aovs},
     render_part_until, render_until, RenderOptions, SampleRange,
 };
 use radia_sampling::SamplerKind;
-use radia_formats::{load_scene, GltfOptions, SceneFormat, SceneOptions};
 use radia_scene::{parse_aovs, AovDesc, FilterDesc, LightSamplerKind, Scene};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -134,7 +134,10 @@ fn handle_signals(cancel: Arc<AtomicBool>, signal: Arc<AtomicI32>) -> Result<(),
     std::thread::spawn(move || {
         for sig in signals.forever() {
             if cancel.load(Ordering::SeqCst) {
-                eprintln!("\nradia: {} again: exiting without writing", signal_name(sig));
+                eprintln!(
+                    "\nradia: {} again: exiting without writing",
+                    signal_name(sig)
+                );
                 std::process::exit(128 + sig);
             }
             signal.store(sig, Ordering::SeqCst);
@@ -290,7 +293,9 @@ fn run_render(command: Command) -> Result<ExitCode, String> {
     if let Some((w, h)) = resolution {
         desc.film.width = w;
         desc.film.height = h;
-        desc.film.check_size().map_err(|e| format!("--resolution {w}x{h}: {e}"))?;
+        desc.film
+            .check_size()
+            .map_err(|e| format!("--resolution {w}x{h}: {e}"))?;
     }
     if let Some(f) = rfilter {
         desc.film.filter = f;

@@ -57,7 +57,11 @@ fn wait_with_limit(mut child: Child, what: &str) -> (ExitStatus, String, String)
         }
         std::thread::sleep(Duration::from_millis(5));
     };
-    (status, out_thread.join().unwrap(), err_thread.join().unwrap())
+    (
+        status,
+        out_thread.join().unwrap(),
+        err_thread.join().unwrap(),
+    )
 }
 
 /// (scene file, expected location) pairs of EXPECTED.
@@ -80,7 +84,15 @@ fn check(name: &str, location: &str, out_dir: &Path) -> Option<String> {
     std::fs::write(&out, SENTINEL).unwrap();
     let child = radia_capped(
         &corpus_dir(),
-        &["render", "-q", "--threads", "1", name, "-o", out.to_str().unwrap()],
+        &[
+            "render",
+            "-q",
+            "--threads",
+            "1",
+            name,
+            "-o",
+            out.to_str().unwrap(),
+        ],
     )
     .spawn()
     .unwrap();
@@ -120,7 +132,10 @@ fn every_bad_input_gives_one_error_line_and_no_image() {
     files.sort();
     let mut names: Vec<String> = cases.iter().map(|(n, _)| n.clone()).collect();
     names.sort();
-    assert_eq!(files, names, "EXPECTED and the files disagree: rerun make_corpus.py");
+    assert_eq!(
+        files, names,
+        "EXPECTED and the files disagree: rerun make_corpus.py"
+    );
 
     let out_dir = std::env::temp_dir().join(format!("radia-bad-inputs-{}", std::process::id()));
     std::fs::create_dir_all(&out_dir).unwrap();

@@ -45,7 +45,10 @@ fn wait_until_loaded(child: &mut Child) -> BufReader<std::process::ChildStderr> 
     let mut line = String::new();
     while !line.contains("radia: loaded") {
         line.clear();
-        assert!(stderr.read_line(&mut line).unwrap() > 0, "radia exited before rendering");
+        assert!(
+            stderr.read_line(&mut line).unwrap() > 0,
+            "radia exited before rendering"
+        );
     }
     stderr
 }
@@ -61,8 +64,16 @@ fn send(signal: &str, child: &Child) {
 
 /// The spp figure in "... wrote N of M spp ..." or "reached N spp".
 fn spp_in(text: &str, before: &str) -> u32 {
-    let i = text.find(before).unwrap_or_else(|| panic!("no '{before}' in {text}")) + before.len();
-    text[i..].split_whitespace().next().unwrap().parse().unwrap()
+    let i = text
+        .find(before)
+        .unwrap_or_else(|| panic!("no '{before}' in {text}"))
+        + before.len();
+    text[i..]
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap()
 }
 
 fn interrupted_render_keeps_the_passes(signal: &str, code: i32) {
@@ -77,7 +88,10 @@ fn interrupted_render_keeps_the_passes(signal: &str, code: i32) {
     std::io::Read::read_to_string(&mut stderr, &mut rest).unwrap();
     assert_eq!(status.code(), Some(code), "{rest}");
     let spp = spp_in(&rest, &format!("interrupted by SIG{signal}: wrote "));
-    assert!(rest.contains(&format!("wrote {spp} of 10000000 spp to {}", out.display())), "{rest}");
+    assert!(
+        rest.contains(&format!("wrote {spp} of 10000000 spp to {}", out.display())),
+        "{rest}"
+    );
     assert!(spp >= 16 && spp.is_multiple_of(16), "{spp} spp");
     assert!(out.exists(), "no image written");
     let _ = std::fs::remove_dir_all(out.parent().unwrap());

@@ -140,7 +140,11 @@ mod tests {
         let mut worst: f64 = 0.0;
         let n = 1_000_000;
         for i in 0..n {
-            for u in [i as f32 / n as f32, -(i as f32) / n as f32, 1.0 + i as f32 / n as f32] {
+            for u in [
+                i as f32 / n as f32,
+                -(i as f32) / n as f32,
+                1.0 + i as f32 / n as f32,
+            ] {
                 let (s, c) = sin_cos_turns(u);
                 let (ws, wc) = (u as f64 * std::f64::consts::TAU).sin_cos();
                 worst = worst.max(abs_eps(s, ws)).max(abs_eps(c, wc));
@@ -161,7 +165,8 @@ mod tests {
         for i in 0..n {
             for j in 0..n {
                 // Angles all round, magnitudes over many octaves.
-                let phi = (i as f64 + 0.5) / n as f64 * std::f64::consts::TAU - std::f64::consts::PI;
+                let phi =
+                    (i as f64 + 0.5) / n as f64 * std::f64::consts::TAU - std::f64::consts::PI;
                 let r = 2f64.powf((j as f64 / n as f64) * 40.0 - 20.0);
                 let (x, y) = ((r * phi.cos()) as f32, (r * phi.sin()) as f32);
                 let want = (y as f64).atan2(x as f64);

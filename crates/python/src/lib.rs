@@ -12,9 +12,9 @@ use pyo3::create_exception;
 use pyo3::exceptions::{PyOSError, PyRuntimeError, PyUserWarning, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict};
+use radia_render::aov::AovFilm;
 use radia_render::film::develop_pixel;
 use radia_render::part::{self, Part, PartError, RenderIdentity};
-use radia_render::aov::AovFilm;
 use radia_render::{
     image_io, render_part_with_aovs, AovLayers, FilmOutput, Image, RenderOptions, SampleRange,
 };
@@ -452,11 +452,7 @@ impl PyPart {
     }
     /// The ranges of [0, spp) it does not hold, as [(a, b), …].
     fn gaps(&self) -> Vec<(u32, u32)> {
-        self.part
-            .gaps()
-            .iter()
-            .map(|r| (r.start, r.end))
-            .collect()
+        self.part.gaps().iter().map(|r| (r.start, r.end)).collect()
     }
     /// The image of its samples: a float32 array (height, width, 3).
     fn develop<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f32>>> {
@@ -533,7 +529,9 @@ fn _part_from_state(state: PartState) -> PyResult<PyPart> {
     }
     let sums = bytes
         .chunks_exact(16)
-        .map(|c| std::array::from_fn(|i| f32::from_le_bytes(c[4 * i..4 * i + 4].try_into().unwrap())))
+        .map(|c| {
+            std::array::from_fn(|i| f32::from_le_bytes(c[4 * i..4 * i + 4].try_into().unwrap()))
+        })
         .collect();
     let identity = RenderIdentity {
         scene,
@@ -585,10 +583,14 @@ fn _merge(
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            let name = names.as_ref().and_then(|n| n.get(i).cloned()).unwrap_or_else(|| {
-                let ranges: Vec<String> = p.part.samples.iter().map(|r| r.to_string()).collect();
-                format!("part {i} (samples {})", ranges.join(","))
-            });
+            let name = names
+                .as_ref()
+                .and_then(|n| n.get(i).cloned())
+                .unwrap_or_else(|| {
+                    let ranges: Vec<String> =
+                        p.part.samples.iter().map(|r| r.to_string()).collect();
+                    format!("part {i} (samples {})", ranges.join(","))
+                });
             (p.part.clone(), name)
         })
         .collect();

@@ -2,10 +2,10 @@
 
 pub mod aov;
 pub mod classic;
-pub mod npr;
 pub mod film;
 pub mod image_io;
 mod integrator;
+pub mod npr;
 pub mod part;
 pub mod path;
 mod renderer;

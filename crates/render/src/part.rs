@@ -258,7 +258,10 @@ impl Merger {
 
     /// Samples per pixel received so far (added or waiting).
     pub fn sample_count(&self) -> u32 {
-        self.merged.iter().map(|(m, _)| m.sample_count()).sum::<u32>()
+        self.merged
+            .iter()
+            .map(|(m, _)| m.sample_count())
+            .sum::<u32>()
             + self
                 .waiting
                 .iter()
@@ -394,8 +397,8 @@ pub fn read_part(path: &Path) -> Result<Part, PartError> {
         .map(SampleRange::parse)
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| not_part(format!("'radia.samples': {e}")))?;
-    let spp = u32::try_from(int("radia.spp")?)
-        .map_err(|_| not_part("'radia.spp' is negative".into()))?;
+    let spp =
+        u32::try_from(int("radia.spp")?).map_err(|_| not_part("'radia.spp' is negative".into()))?;
     if samples.iter().any(|r| r.end > spp) {
         return Err(not_part(format!(
             "'radia.samples' goes past the sample count {spp}"
@@ -496,18 +499,27 @@ mod tests {
 
     #[test]
     fn merge_refuses_overlaps_and_other_renders_and_reports_gaps() {
-        let err = merge(vec![(part(0, 32, 1.0), "a".into()), (part(16, 48, 1.0), "b".into())])
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("16..32") && err.contains("a") && err.contains("b"), "{err}");
+        let err = merge(vec![
+            (part(0, 32, 1.0), "a".into()),
+            (part(16, 48, 1.0), "b".into()),
+        ])
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.contains("16..32") && err.contains("a") && err.contains("b"),
+            "{err}"
+        );
         let mut other = part(32, 48, 1.0);
         other.identity.seed = 5;
         let err = merge(vec![(part(0, 32, 1.0), "a".into()), (other, "b".into())])
             .unwrap_err()
             .to_string();
         assert!(err.contains("seeds"), "{err}");
-        let m = merge(vec![(part(0, 16, 1.0), "a".into()), (part(32, 48, 1.0), "b".into())])
-            .unwrap();
+        let m = merge(vec![
+            (part(0, 16, 1.0), "a".into()),
+            (part(32, 48, 1.0), "b".into()),
+        ])
+        .unwrap();
         assert_eq!(
             m.gaps(),
             vec![SampleRange::new(16, 32), SampleRange::new(48, 64)]

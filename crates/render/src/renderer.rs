@@ -12,9 +12,9 @@
 
 use crate::aov::{AovFilm, AovIntegrator, AovLayers};
 use crate::classic::ClassicIntegrator;
-use crate::npr::NprIntegrator;
 use crate::film::{Film, Filter, Image};
 use crate::integrator::Integrator;
+use crate::npr::NprIntegrator;
 use crate::path::{layout, PathIntegrator, PathStats};
 use glam::{UVec2, Vec2};
 use radia_math::{Ray, Spectrum};

@@ -31,10 +31,18 @@ pub struct IntegratorDesc {
 pub enum NprStyle {
     /// Lambert's cos θ quantised to `levels` bands, shown as kd·k/(levels − 1), or, with a
     /// `ramp` (then `levels` = its length), as the ramp's k-th colour.
-    Toon { levels: u32, ramp: Option<Vec<Spectrum>> },
+    Toon {
+        levels: u32,
+        ramp: Option<Vec<Spectrum>>,
+    },
     /// Gooch et al. 1998: k_cool = (0, 0, b) + α·kd, k_warm = (y, y, 0) + β·kd, blended by
     /// (1 + l·n)/2.
-    Gooch { b: f32, y: f32, alpha: f32, beta: f32 },
+    Gooch {
+        b: f32,
+        y: f32,
+        alpha: f32,
+        beta: f32,
+    },
 }
 
 /// radia's `npr` integrator (see `radia_render::npr`).

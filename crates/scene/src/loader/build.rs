@@ -10,8 +10,8 @@ use super::transform;
 use super::xml::{Doc, Kind};
 use super::LoadError;
 use crate::{
-    parse_aovs, AovDesc, CameraDesc, ClassicDesc, ClassicShading, NprDesc, NprStyle, EmitterDesc, FilmDesc, FilterDesc, IntegratorDesc,
-    SamplerDesc, SceneDescription,
+    parse_aovs, AovDesc, CameraDesc, ClassicDesc, ClassicShading, EmitterDesc, FilmDesc,
+    FilterDesc, IntegratorDesc, NprDesc, NprStyle, SamplerDesc, SceneDescription,
 };
 use glam::Affine3A;
 use radia_bsdf::{Bsdf, Texture};
@@ -180,8 +180,15 @@ fn build_classic_integrator(mut p: Props<'_>) -> Result<IntegratorDesc, LoadErro
                 .split(',')
                 .map(|t| t.trim().parse::<f32>())
                 .collect::<Result<_, _>>()
-                .map_err(|_| p.err_at(p.pos_of("attenuation"), format!("\"attenuation\" must be three numbers a, b, c, got \"{text}\"")))?;
-            let ok = v.len() == 3 && v.iter().all(|x| x.is_finite() && *x >= 0.0) && v.iter().any(|x| *x > 0.0);
+                .map_err(|_| {
+                    p.err_at(
+                        p.pos_of("attenuation"),
+                        format!("\"attenuation\" must be three numbers a, b, c, got \"{text}\""),
+                    )
+                })?;
+            let ok = v.len() == 3
+                && v.iter().all(|x| x.is_finite() && *x >= 0.0)
+                && v.iter().any(|x| *x > 0.0);
             if !ok {
                 return Err(p.err_at(
                     p.pos_of("attenuation"),
@@ -261,14 +268,19 @@ fn build_npr_integrator(mut p: Props<'_>) -> Result<IntegratorDesc, LoadError> {
     };
     let line_width = p.float("line_width", 1.0)?;
     if !(0.0..=64.0).contains(&line_width) {
-        return Err(p.err_at(p.pos_of("line_width"), format!("\"line_width\" must be in [0, 64] pixels, got {line_width}")));
+        return Err(p.err_at(
+            p.pos_of("line_width"),
+            format!("\"line_width\" must be in [0, 64] pixels, got {line_width}"),
+        ));
     }
     let lc = p.color("line_color", 0.0, false)?;
     let crease_angle = p.float("crease_angle", 60.0)?;
     let depth_threshold = p.float("depth_threshold", 0.05)?;
     let threshold_ok = depth_threshold > 0.0; // false for NaN too
     if !threshold_ok || !(0.0..=180.0).contains(&crease_angle) {
-        return Err(p.err("\"depth_threshold\" must be > 0 and \"crease_angle\" in [0, 180] degrees"));
+        return Err(
+            p.err("\"depth_threshold\" must be > 0 and \"crease_angle\" in [0, 180] degrees")
+        );
     }
     p.finish()?;
     Ok(IntegratorDesc {
@@ -289,7 +301,10 @@ fn build_npr_integrator(mut p: Props<'_>) -> Result<IntegratorDesc, LoadError> {
 fn parse_ramp(text: &str) -> Result<Vec<radia_math::Spectrum>, String> {
     let colours: Vec<&str> = text.split(';').map(str::trim).collect();
     if colours.len() > 256 {
-        return Err(format!("\"ramp\" has {} colours; at most 256", colours.len()));
+        return Err(format!(
+            "\"ramp\" has {} colours; at most 256",
+            colours.len()
+        ));
     }
     colours
         .iter()

@@ -652,11 +652,31 @@ fn loader_classic_integrator() {
         })
     );
     for (name, body, needle) in [
-        ("classic-shading", r#"<integrator type="classic"><string name="shading" value="smooth"/></integrator>"#, "unknown shading \"smooth\""),
-        ("classic-att", r#"<integrator type="classic"><string name="attenuation" value="1, 2"/></integrator>"#, "three non-negative numbers"),
-        ("classic-att0", r#"<integrator type="classic"><string name="attenuation" value="0, 0, 0"/></integrator>"#, "not all 0"),
-        ("classic-att-text", r#"<integrator type="classic"><string name="attenuation" value="a, b, c"/></integrator>"#, "must be three numbers"),
-        ("classic-depth", r#"<integrator type="classic"><integer name="max_depth" value="0"/></integrator>"#, "max_depth"),
+        (
+            "classic-shading",
+            r#"<integrator type="classic"><string name="shading" value="smooth"/></integrator>"#,
+            "unknown shading \"smooth\"",
+        ),
+        (
+            "classic-att",
+            r#"<integrator type="classic"><string name="attenuation" value="1, 2"/></integrator>"#,
+            "three non-negative numbers",
+        ),
+        (
+            "classic-att0",
+            r#"<integrator type="classic"><string name="attenuation" value="0, 0, 0"/></integrator>"#,
+            "not all 0",
+        ),
+        (
+            "classic-att-text",
+            r#"<integrator type="classic"><string name="attenuation" value="a, b, c"/></integrator>"#,
+            "must be three numbers",
+        ),
+        (
+            "classic-depth",
+            r#"<integrator type="classic"><integer name="max_depth" value="0"/></integrator>"#,
+            "max_depth",
+        ),
     ] {
         expect_err(load(name, body), needle);
     }
