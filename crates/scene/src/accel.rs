@@ -217,6 +217,9 @@ pub struct Accel {
     analytic: Option<Vec<u64>>,
     /// Levels of the BVH: traversal needs a stack entry per level.
     depth: usize,
+    /// With at most eight primitives (one lane group) the box tests of a traversal cost more
+    /// than they save: every query tests them all directly ([`Accel::FLAT_MAX`]).
+    flat: bool,
 }
 
 impl Accel {
@@ -241,6 +244,7 @@ impl Accel {
                 lanes: wide::TriangleLanes::new(std::iter::empty()),
                 analytic: None,
                 depth: 0,
+                flat: false,
             };
         }
         let mut bounds = Vec::with_capacity(total);
@@ -320,13 +324,35 @@ impl Accel {
                 }
                 bits
             });
+        let flat = primitives.len() <= Self::FLAT_MAX;
         Self {
             bvh,
             primitives,
             lanes,
             analytic,
             depth,
+            flat,
         }
+    }
+
+    /// Most primitives a scene may have for its queries to skip the BVH: one group of eight
+    /// lanes of the triangle test (analytic shapes among them are tested one by one, as in a
+    /// leaf).
+    const FLAT_MAX: usize = 8;
+
+    /// The closest (with `any_hit`, the first) hit along `ray` among all primitives, without
+    /// the BVH ([`Accel::flat`]).
+    #[inline(always)]
+    fn intersect_flat(
+        &self,
+        shapes: &[Shape],
+        ray: &Ray,
+        any_hit: bool,
+        bary: &mut Vec2,
+    ) -> Option<(u32, f32)> {
+        let all = (1u32 << self.primitives.len()) - 1;
+        let wray = WatertightRay::new(ray);
+        self.intersect_leaves(shapes, &wray, ray, 0, all, ray.t_max, any_hit, bary)
     }
 
     /// Runs `f` with a traversal stack deep enough for this BVH: on the call stack for every
@@ -443,9 +469,13 @@ impl Accel {
         if self.primitives.is_empty() {
             return None;
         }
+        let mut bary = Vec2::ZERO;
+        if self.flat {
+            let (prim, t) = self.intersect_flat(shapes, ray, false, &mut bary)?;
+            return Some(Hit { t, prim, bary });
+        }
         let wray = WatertightRay::new(ray);
         let node_ray = wide::NodeRay::new(ray.o, ray.d, ray.t_max);
-        let mut bary = Vec2::ZERO;
         let (prim, t) = self.with_stack(|stack| {
             wide::traverse(
                 &self.bvh,
@@ -467,9 +497,12 @@ impl Accel {
         if self.primitives.is_empty() {
             return false;
         }
+        let mut bary = Vec2::ZERO;
+        if self.flat {
+            return self.intersect_flat(shapes, ray, true, &mut bary).is_some();
+        }
         let wray = WatertightRay::new(ray);
         let node_ray = wide::NodeRay::new(ray.o, ray.d, ray.t_max);
-        let mut bary = Vec2::ZERO;
         self.with_stack(|stack| {
             wide::traverse(
                 &self.bvh,

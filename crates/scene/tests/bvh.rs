@@ -171,6 +171,118 @@ fn bvh_agrees_with_brute_force() {
     assert_eq!(leaks, 0, "rays escaped the closed mesh");
 }
 
+/// Scenes of one to twelve primitives, below and above the size at which queries skip the
+/// BVH and test every primitive (`Accel::FLAT_MAX`): spheres, disks and triangles mixed,
+/// rays from inside and outside, some with a finite t_max; closest hit and occlusion must
+/// agree with brute force on every ray.
+#[test]
+fn small_scenes_agree_with_brute_force() {
+    let mut rng = Pcg64::seed_from_u64(7);
+    for n in 1..=12usize {
+        let mut shapes = Vec::new();
+        let mut tris = Vec::new();
+        for k in 0..n {
+            let c = Vec3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            );
+            match k % 3 {
+                0 => shapes.push(Shape::new(
+                    Geometry::Sphere {
+                        center: c,
+                        radius: rng.random_range(0.1..0.6),
+                        flip_normals: false,
+                    },
+                    0,
+                    None,
+                )),
+                1 => shapes.push(Shape::new(
+                    Geometry::Disk {
+                        to_world: glam::Affine3A::from_scale_rotation_translation(
+                            Vec3::splat(rng.random_range(0.2..0.8)),
+                            glam::Quat::from_axis_angle(random_dir(&mut rng), 1.0),
+                            c,
+                        ),
+                        flip_normals: false,
+                    },
+                    0,
+                    None,
+                )),
+                _ => tris.push(c),
+            }
+        }
+        if !tris.is_empty() {
+            // The triangles as one mesh: each a random triangle about its centre.
+            let mut positions = Vec::new();
+            let mut indices = Vec::new();
+            for (i, c) in tris.iter().enumerate() {
+                for _ in 0..3 {
+                    positions.push(*c + random_dir(&mut rng) * 0.7);
+                }
+                let k = 3 * i as u32;
+                indices.push([k, k + 1, k + 2]);
+            }
+            shapes.push(Shape::new(
+                Geometry::Mesh(Mesh {
+                    positions,
+                    indices,
+                    ..Default::default()
+                }),
+                0,
+                None,
+            ));
+        }
+        let accel = Accel::build(&shapes);
+        assert_eq!(accel.primitives.len(), n);
+        let bounds = accel.primitive_bounds(&shapes);
+        let (mut hits, mut disagreements) = (0, 0);
+        for i in 0..20_000 {
+            let o = if i % 2 == 0 {
+                Vec3::new(
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                )
+            } else {
+                random_dir(&mut rng) * 3.0
+            };
+            let d = if i % 2 == 0 {
+                random_dir(&mut rng)
+            } else {
+                (Vec3::new(
+                    rng.random_range(-0.8..0.8),
+                    rng.random_range(-0.8..0.8),
+                    rng.random_range(-0.8..0.8),
+                ) - o)
+                    .normalize()
+            };
+            let t_max = if i % 3 == 0 {
+                rng.random_range(0.5..4.0)
+            } else {
+                f32::INFINITY
+            };
+            let ray = Ray::new(o, d, t_max);
+            let fast = accel.intersect(&shapes, &ray);
+            let brute = accel.intersect_brute_force(&shapes, &bounds, &ray);
+            hits += brute.is_some() as u32;
+            let same = match (fast, brute) {
+                (None, None) => true,
+                (Some(a), Some(b)) => a.t == b.t && a.prim == b.prim,
+                _ => false,
+            };
+            if !same || accel.occluded(&shapes, &ray) != brute.is_some() {
+                disagreements += 1;
+            }
+        }
+        assert_eq!(
+            disagreements, 0,
+            "{n} primitives: {disagreements} disagreements"
+        );
+        assert!(hits > 100, "{n} primitives: only {hits} rays hit anything");
+    }
+}
+
 /// The large case: 10⁶ triangles, 5·10⁵ incoherent rays. The CWBVH is compared with
 /// obvhs' BVH2 (a different tree and traversal); brute force settles any disagreement.
 /// Slow (minutes): run with `cargo test -p radia-scene --test bvh -- --ignored`.
