@@ -266,10 +266,27 @@ impl Envmap {
         let x = u * w as f32 - 0.5;
         let x0 = x.floor();
         let i = wrap_column(x0, w);
-        // Rows by comparison with the same cos θ table sampling interpolates in.
-        let inner = &self.row_cos[1..self.height - 1];
-        let j = inner.partition_point(|&c| c > d.y);
+        let j = self.cell_row(d.y);
         (i, j, Vec2::new((x - x0).clamp(0.0, 1.0), self.cell_t(j, d)))
+    }
+
+    /// The row of cells holding directions of cos θ = `cos_theta`: the number of inner texel
+    /// rows 1..H − 1 above it (cos θⱼ > cos θ), by comparison with the same cos θ table
+    /// sampling interpolates in. The row θ / Δθ is the guess, which the comparisons then
+    /// correct by the round-off of acos (a step at most, in practice): no binary search.
+    #[inline]
+    fn cell_row(&self, cos_theta: f32) -> usize {
+        let last = self.height - 2;
+        let guess = safe_acos(cos_theta) * INV_PI * (self.height - 1) as f32;
+        // `as` saturates: NaN gives 0, as the comparisons below then keep it.
+        let mut j = (guess as usize).min(last);
+        while j > 0 && !(self.row_cos[j] > cos_theta) {
+            j -= 1;
+        }
+        while j < last && self.row_cos[j + 1] > cos_theta {
+            j += 1;
+        }
+        j
     }
 
     /// The weights at the corners of cell (i, j), in the order of
@@ -316,9 +333,24 @@ impl Envmap {
             n: Vec3::ZERO,
             p_error: Vec3::ZERO,
             pdf,
-            radiance: self.eval_local(local),
+            radiance: self.eval_cell(i, j, st.x, cos_theta, sin_theta),
             is_delta: false,
         })
+    }
+
+    /// [`Envmap::eval_local`] at the direction of cell coordinates (i, j, s) and polar angle
+    /// (cos θ, sin θ): the same bilinear lookup without recovering them from the direction
+    /// (texel column i + s, row θ / Δθ in cell row j).
+    #[inline]
+    fn eval_cell(&self, i: usize, j: usize, s: f32, cos_theta: f32, sin_theta: f32) -> Spectrum {
+        let w = self.width;
+        let i1 = if i + 1 == w { 0 } else { i + 1 };
+        let y = radia_math::trig::atan2(sin_theta, cos_theta) * INV_PI * (self.height - 1) as f32;
+        let fy = (y - j as f32).clamp(0.0, 1.0);
+        let t = &self.texels;
+        let top = t[j * w + i] * (1.0 - s) + t[j * w + i1] * s;
+        let bottom = t[(j + 1) * w + i] * (1.0 - s) + t[(j + 1) * w + i1] * s;
+        top * (1.0 - fy) + bottom * fy
     }
 
     /// Solid-angle density of [`Envmap::sample_direction`] returning world direction `d`.
@@ -350,4 +382,43 @@ fn wrap_column(x0: f32, w: usize) -> usize {
     } else {
         i.rem_euclid(w)
     }) as usize
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `cell_row` is the binary search it replaces (the count of inner rows with
+    /// cos θⱼ > cos θ), on every row border, one ulp either side, between rows, at the poles
+    /// and for NaN, for maps of odd and even height, small and large.
+    #[test]
+    fn cell_row_is_the_binary_search() {
+        for (w, h) in [
+            (2, 3),
+            (4, 4),
+            (8, 5),
+            (24, 12),
+            (64, 33),
+            (1024, 512),
+            (16, 1001),
+        ] {
+            let image = RgbImage {
+                width: w,
+                height: h,
+                pixels: vec![Vec3::ONE; (w * h) as usize],
+            };
+            let e = Envmap::new(&image, 1.0, Affine3A::IDENTITY, false);
+            let search = |c: f32| e.row_cos[1..e.height - 1].partition_point(|&r| r > c);
+            let mut probes = vec![f32::NAN, 1.0, -1.0, 0.0, -0.0];
+            for &r in &e.row_cos {
+                probes.extend([r, r.next_up(), r.next_down()]);
+            }
+            for k in 0..=10_000 {
+                probes.push(1.0 - 2.0 * k as f32 / 10_000.0);
+            }
+            for c in probes {
+                assert_eq!(e.cell_row(c), search(c), "{w}x{h}, cos θ = {c}");
+            }
+        }
+    }
 }
