@@ -5,11 +5,13 @@ mod wide;
 
 use crate::shape::{Shape, ShapeKind};
 use glam::{UVec2, Vec2, Vec3};
-use obvhs::{aabb::Aabb, cwbvh::CwBvh, Boundable, BvhBuildParams};
+use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
+use obvhs::cwbvh::{bvh2_to_cwbvh::bvh2_to_cwbvh, CwBvh};
+use obvhs::ploc::PlocBuilder;
+use obvhs::{aabb::Aabb, Boundable, BvhBuildParams};
 use radia_math::Ray;
 use rayon::prelude::*;
 use std::mem::MaybeUninit;
-use std::time::Duration;
 
 /// One primitive in BVH order: a triangle with its vertices inline (one cache line), or a
 /// reference to an analytic shape.
@@ -44,18 +46,42 @@ impl Primitive {
 struct Bounded(Aabb);
 
 impl Boundable for Bounded {
-    /// The box, clamped to ±[`MAX_BUILD_COORDINATE`]: the builder's surface areas of boxes
-    /// beyond it overflow f32 (found by fuzzing: a glTF with coordinates near 10³⁸ broke the
-    /// CWBVH builder's decisions). The clamped box still holds every part of the primitive
-    /// a ray within that range can reach.
+    /// The box, clamped to ±[`MAX_BUILD_COORDINATE`]: beyond it the builder's costs overflow
+    /// f32 (found by fuzzing: a glTF with coordinates near 10³⁸ broke the CWBVH builder's
+    /// decisions, and a 61 KB GLB with coordinates up to 10¹⁸ still summed its nodes' surface
+    /// areas to infinity, leaving obvhs' BVH8 conversion without a valid split). The clamped box
+    /// still holds every part of the primitive that a ray can reach within that range.
     fn aabb(&self) -> Aabb {
         let lim = glam::Vec3A::splat(MAX_BUILD_COORDINATE);
         Aabb::new(self.0.min.clamp(-lim, lim), self.0.max.clamp(-lim, lim))
     }
 }
 
-/// Largest coordinate the BVH builder sees: (2·10¹⁸)² · 6 stays below f32::MAX.
-const MAX_BUILD_COORDINATE: f32 = 1e18;
+/// Largest coordinate the BVH builder sees. obvhs' BVH8 conversion sums, over a subtree, each
+/// node's half area (at most 3 · (2·10¹³)² = 1.2·10²⁷ here) times at most its primitive count,
+/// so its costs stay finite (below f32::MAX = 3.4·10³⁸) for up to 10⁹ primitives even if every
+/// box spanned the whole range. f32 resolves only about 10⁶ units at 10¹³: no meaningful
+/// geometry lies beyond it.
+const MAX_BUILD_COORDINATE: f32 = 1e13;
+
+/// obvhs' `cwbvh::builder::build_cwbvh` (0.4.0; "just a helper function / example, feel free
+/// to reimplement"): PLOC, reinsertion, conversion to the compressed BVH8, with its medium
+/// build settings, but without its debug-build validation, which asserts that the tree fits
+/// obvhs' own fixed traversal stack. radia's traversal sizes its stack to the tree instead
+/// ([`Accel::with_stack`]), so a deep tree (found by fuzzing: a 61 KB GLB with coordinates
+/// over many orders of magnitude) is valid here and must not abort debug builds and tests.
+fn build_cwbvh(bounds: &[Bounded]) -> CwBvh {
+    let config = BvhBuildParams::medium_build();
+    let mut bvh2 = PlocBuilder::with_capacity(bounds.len()).build(
+        config.ploc_search_distance,
+        bounds,
+        (0..bounds.len() as u32).collect::<Vec<_>>(),
+        config.sort_precision,
+        config.search_depth_threshold,
+    );
+    ReinsertionOptimizer::default().run(&mut bvh2, config.reinsertion_batch_ratio, None);
+    bvh2_to_cwbvh(&bvh2, config.max_prims_per_leaf.clamp(1, 3), true, false)
+}
 
 /// The closest hit found by [`Accel::intersect`].
 #[derive(Clone, Copy, Debug)]
@@ -273,11 +299,7 @@ impl Accel {
                 }
             }
         }
-        let bvh = obvhs::cwbvh::builder::build_cwbvh(
-            &bounds,
-            BvhBuildParams::medium_build(),
-            &mut Duration::default(),
-        );
+        let bvh = build_cwbvh(&bounds);
         // Real scenes stay far below STACK_SIZE levels; pathological geometry (found by
         // fuzzing: coordinates spread over many orders of magnitude) can go deeper, and is
         // then traversed with a stack on the heap (`with_stack`).
