@@ -43,7 +43,7 @@ impl Primitive {
 }
 
 /// A primitive with its bounds, for the builder.
-struct Bounded(Aabb);
+pub(crate) struct Bounded(pub(crate) Aabb);
 
 impl Boundable for Bounded {
     /// The box, clamped to ±[`MAX_BUILD_COORDINATE`]: beyond it the builder's costs overflow
@@ -70,7 +70,7 @@ const MAX_BUILD_COORDINATE: f32 = 1e13;
 /// obvhs' own fixed traversal stack. radia's traversal sizes its stack to the tree instead
 /// ([`Accel::with_stack`]), so a deep tree (found by fuzzing: a 61 KB GLB with coordinates
 /// over many orders of magnitude) is valid here and must not abort debug builds and tests.
-fn build_cwbvh(bounds: &[Bounded]) -> CwBvh {
+pub(crate) fn build_cwbvh(bounds: &[Bounded]) -> CwBvh {
     let config = BvhBuildParams::medium_build();
     let mut bvh2 = PlocBuilder::with_capacity(bounds.len()).build(
         config.ploc_search_distance,

@@ -30,9 +30,6 @@ pub struct NodeRay {
     neg: [bool; 3],
     /// Ray octant in obvhs' child-order encoding (`ray_get_octant_inv4`).
     oct_inv4: u32,
-    /// For the portable path.
-    #[allow(dead_code)]
-    obvhs: obvhs::ray::Ray,
 }
 
 impl NodeRay {
@@ -47,7 +44,6 @@ impl NodeRay {
             inv_dir: ray.inv_direction,
             neg: [d.x < 0.0, d.y < 0.0, d.z < 0.0],
             oct_inv4,
-            obvhs: ray,
         }
     }
 }
@@ -82,9 +78,53 @@ pub fn intersect_node(node: &CwBvhNode, ray: &NodeRay, t_max: f32) -> u32 {
         target_feature = "fma"
     )))]
     {
-        let mut r = ray.obvhs;
-        r.tmax = t_max;
-        node.intersect_ray(&r, ray.oct_inv4)
+        portable::intersect_node(node, ray, t_max)
+    }
+}
+
+/// The node test without AVX2: the same conservative slabs, child by child, with the same
+/// operations (a fused multiply-add per plane), so it gives the AVX2 test's hit masks bit for
+/// bit (test `portable_node_test_is_the_avx2_one`). obvhs' own portable test is not used: it
+/// starts boxes at t = 10⁻⁴ and has no slack for the rounding of the slab distances.
+#[allow(dead_code)] // with AVX2, only the tests call it
+pub mod portable {
+    use super::*;
+
+    /// The relative rounding of the slab distances (see [`intersect_node`]).
+    const BOX_SLACK: f32 = radia_math::float::gamma(4);
+
+    #[inline(always)]
+    pub fn intersect_node(node: &CwBvhNode, ray: &NodeRay, t_max: f32) -> u32 {
+        let step = extent(node);
+        let scale = step * ray.inv_dir;
+        let from_origin = Vec3A::from(node.p) - ray.origin;
+        let offset = from_origin * ray.inv_dir;
+        let slack = (from_origin.abs() + step * 255.0) * ray.inv_dir.abs() * BOX_SLACK;
+        let planes = [
+            (&node.child_min_x, &node.child_max_x),
+            (&node.child_min_y, &node.child_max_y),
+            (&node.child_min_z, &node.child_max_z),
+        ];
+        let (child_bits8, bit_index8) = node.get_child_and_index_bits(ray.oct_inv4);
+        let mut mask = 0u32;
+        for c in 0..8 {
+            let (mut t_near, mut t_far) = (0.0f32, t_max);
+            for (axis, (lo, hi)) in planes.iter().enumerate() {
+                let (lo, hi) = (lo[c] as f32, hi[c] as f32);
+                let (near, far) = if ray.neg[axis] { (hi, lo) } else { (lo, hi) };
+                // max/min as `vmaxps`/`vminps` take them: the second operand on NaN.
+                let n = near.mul_add(scale[axis], offset[axis] - slack[axis]);
+                let f = far.mul_add(scale[axis], offset[axis] + slack[axis]);
+                t_near = if t_near > n { t_near } else { n };
+                t_far = if t_far < f { t_far } else { f };
+            }
+            if t_near <= t_far {
+                let bits = (child_bits8 >> (8 * c)) as u32 & 0xff;
+                let shift = (bit_index8 >> (8 * c)) as u32 & 0xff;
+                mask |= bits << shift;
+            }
+        }
+        mask
     }
 }
 
@@ -439,6 +479,94 @@ mod tests {
     use radia_math::Ray;
     use rand::{Rng, SeedableRng};
     use rand_pcg::Pcg64;
+
+    /// The nodes of a BVH8 over random small triangles spread over `extent`.
+    fn random_nodes(rng: &mut Pcg64, extent: f32) -> Vec<CwBvhNode> {
+        let tris: Vec<crate::accel::Bounded> = (0..3000)
+            .map(|_| {
+                let c = Vec3::new(rng.random(), rng.random(), rng.random()) * 2.0 - 1.0;
+                let c = c * extent;
+                let h = Vec3::splat(extent * 0.02);
+                crate::accel::Bounded(obvhs::aabb::Aabb::new((c - h).into(), (c + h).into()))
+            })
+            .collect();
+        crate::accel::build_cwbvh(&tris).nodes
+    }
+
+    /// The portable node test gives the AVX2 test's masks bit for bit (where AVX2 is there;
+    /// elsewhere both are the portable test), on random rays, rays aimed at the corners of the
+    /// children's boxes, along axes (infinite reciprocals) and with finite t_max; and every ray
+    /// aimed at a corner of a child's box from outside hits that child (conservative slabs).
+    #[test]
+    fn portable_node_test_is_the_avx2_one() {
+        let mut rng = Pcg64::seed_from_u64(11);
+        let (mut compared, mut corner_hits) = (0u32, 0u32);
+        for extent in [1e-4f32, 1.0, 1e5] {
+            let nodes = random_nodes(&mut rng, extent);
+            for node in nodes.iter().step_by(7).take(200) {
+                let step = extent_of(node);
+                for k in 0..64 {
+                    let c = k % 8;
+                    let corner = Vec3::new(
+                        node.p.x
+                            + step.x
+                                * if k & 8 != 0 {
+                                    node.child_max_x[c]
+                                } else {
+                                    node.child_min_x[c]
+                                } as f32,
+                        node.p.y
+                            + step.y
+                                * if k & 16 != 0 {
+                                    node.child_max_y[c]
+                                } else {
+                                    node.child_min_y[c]
+                                } as f32,
+                        node.p.z
+                            + step.z
+                                * if k & 32 != 0 {
+                                    node.child_max_z[c]
+                                } else {
+                                    node.child_min_z[c]
+                                } as f32,
+                    );
+                    let o = Vec3::new(rng.random(), rng.random(), rng.random()) * 6.0 * extent
+                        - 3.0 * extent;
+                    let d = match k % 4 {
+                        0 => Vec3::new(rng.random(), rng.random(), rng.random()) * 2.0 - 1.0,
+                        1 => Vec3::X * if rng.random::<bool>() { 1.0 } else { -1.0 },
+                        _ => corner - o,
+                    };
+                    if d.length_squared() == 0.0 {
+                        continue;
+                    }
+                    let d = d.normalize();
+                    let t_max = if k % 5 == 0 { extent } else { f32::INFINITY };
+                    let ray = NodeRay::new(o, d, t_max);
+                    let got = portable::intersect_node(node, &ray, t_max);
+                    assert_eq!(got, intersect_node(node, &ray, t_max), "node {node:?}");
+                    compared += 1;
+                    let is_child = (node.child_meta[c] != 0) as u32;
+                    if k % 4 >= 2 && t_max.is_infinite() && is_child != 0 {
+                        // The ray reaches the corner: the child's bits must be in the mask.
+                        let (bits, index) = node.get_child_and_index_bits(ray.oct_inv4);
+                        let want =
+                            ((bits >> (8 * c)) as u32 & 0xff) << ((index >> (8 * c)) as u32 & 0xff);
+                        assert_eq!(got & want, want, "corner {corner} of child {c} missed");
+                        corner_hits += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            compared > 8_000 && corner_hits > 3_000,
+            "{compared} compared, {corner_hits} corners"
+        );
+    }
+
+    fn extent_of(node: &CwBvhNode) -> Vec3 {
+        Vec3::from(extent(node))
+    }
 
     /// The 8-wide test gives the scalar test's answers bit for bit, on random triangles and
     /// on rays aimed exactly at vertices and edge midpoints (where edge functions vanish).
