@@ -151,6 +151,63 @@ class RenderTest(unittest.TestCase):
         self.assertLess(time.perf_counter() - t0, 5.0)
 
 
+class OverrideTest(unittest.TestCase):
+    """load_file(resolution=, rfilter=) and render(sampler=) as the CLI's --resolution,
+    --rfilter and --sampler; render(stats=True) with the CLI's figures."""
+
+    def test_overrides_equal_the_cli_bit_for_bit(self):
+        d = tmpdir(self)
+        out = os.path.join(d, "cli.exr")
+        # nodefaults.xml: a literal 48x36 film, a gaussian filter, a stratified sampler.
+        for resolution, size, rfilter, sampler in [((20, 14), "20x14", "box", "independent"),
+                                                    (18, "18", "gaussian", "sobol"),
+                                                    (16, "16", "box", None)]:
+            with self.subTest(resolution=resolution, rfilter=rfilter, sampler=sampler):
+                args = ["--sampler", sampler] if sampler else []
+                cli("render", NODEFAULTS, "--resolution", size, "--rfilter", rfilter, *args,
+                    "--spp", 16, "--seed", 2, "-q", "-o", out)
+                scene = radia.load_file(NODEFAULTS, resolution=resolution, rfilter=rfilter)
+                w, h = (resolution, resolution) if isinstance(resolution, int) else resolution
+                self.assertEqual(scene.resolution, (w, h))
+                img = radia.render(scene, spp=16, seed=2, sampler=sampler)
+                np.testing.assert_array_equal(bits(img), bits(read_exr(out)))
+        # The override is part of the scene's content: parts of other sizes are told apart.
+        self.assertNotEqual(radia.load_file(NODEFAULTS, resolution=16).fingerprint,
+                            radia.load_file(NODEFAULTS).fingerprint)
+        self.assertNotEqual(radia.load_file(NODEFAULTS, rfilter="box").fingerprint,
+                            radia.load_file(NODEFAULTS).fingerprint)
+
+    def test_stats(self):
+        scene = radia.load_file(SIMPLE, res=16)
+        img, st = radia.render(scene, spp=9, seed=1, stats=True)
+        np.testing.assert_array_equal(bits(img), bits(radia.render(scene, spp=9, seed=1)))
+        self.assertEqual((st.spp, st.samples, st.invalid_samples), (9, 16 * 16 * 9, 0))
+        self.assertGreaterEqual(st.rays, st.samples)   # a camera ray per sample, and more
+        self.assertGreater(st.seconds, 0.0)
+        self.assertIn("invalid samples", repr(st))
+        # With samples= the result is the Part, the stats of its range.
+        part, st = radia.render(scene, spp=32, seed=1, samples=(16, 32), stats=True)
+        self.assertEqual((part.samples, st.spp, st.samples), ([(16, 32)], 16, 16 * 16 * 16))
+        # The stratified sampler rounds 8 to 9, and says so.
+        with warnings.catch_warnings(record=True) as w:
+            warnings.simplefilter("always")
+            _, st = radia.render(scene, spp=8, sampler="stratified", stats=True)
+        self.assertEqual(st.spp, 9)
+        self.assertTrue(any("renders 9 spp" in str(x.message) for x in w))
+
+    def test_bad_overrides_are_value_errors(self):
+        for kwargs, what in [({"resolution": 0}, "at least 1"),
+                             ({"resolution": (4, 0)}, "at least 1"),
+                             ({"resolution": "abc"}, r"int or a \(width, height\)"),
+                             ({"resolution": (1, 2, 3)}, r"int or a \(width, height\)"),
+                             ({"rfilter": "tent"}, "box or gaussian")]:
+            with self.subTest(**kwargs):
+                with self.assertRaisesRegex(ValueError, what):
+                    radia.load_file(SIMPLE, **kwargs)
+        with self.assertRaisesRegex(ValueError, "unknown sampler.*independent"):
+            radia.render(radia.load_file(SIMPLE, res=4), spp=1, sampler="halton")
+
+
 class SplitMergeTest(unittest.TestCase):
     def parts(self, scene, spp, seed, ends):
         return [radia.render(scene, spp=spp, seed=seed, samples=(a, b))

@@ -16,15 +16,17 @@ use radia_render::aov::AovFilm;
 use radia_render::film::develop_pixel;
 use radia_render::part::{self, Part, PartError, RenderIdentity};
 use radia_render::{
-    image_io, render_part_with_aovs, AovLayers, FilmOutput, Image, RenderOptions, SampleRange,
+    image_io, render_part_with_aovs, AovLayers, FilmOutput, Image, RenderOptions, RenderStats,
+    SampleRange,
 };
+use radia_sampling::SamplerKind;
 use radia_scene::loader::load_mitsuba_xml_with_warnings;
-use radia_scene::{parse_aovs, AovDesc, LightSamplerKind, Scene};
+use radia_scene::{parse_aovs, AovDesc, FilterDesc, LightSamplerKind, Scene};
 use std::ffi::CString;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 create_exception!(
     radia,
@@ -122,15 +124,33 @@ impl PyScene {
 }
 
 /// Loads a Mitsuba 3 XML scene. Keyword arguments define or override the scene's
-/// ``<default>`` parameters, as Mitsuba's ``-D`` (``radia.load_file("cbox.xml", res=64)``).
-/// Raises :class:`LoadError` (with ``file``, ``line``, ``column``, ``message``).
+/// ``<default>`` parameters, as Mitsuba's ``-D`` (``radia.load_file("cbox.xml", res=64)``),
+/// except ``resolution`` and ``rfilter``, which override the scene's film as ``radia render
+/// --resolution`` and ``--rfilter`` do: ``resolution`` an int (a square) or ``(width,
+/// height)``, ``rfilter`` ``"box"`` or ``"gaussian"`` (stddev 0.5). Raises
+/// :class:`LoadError` (with ``file``, ``line``, ``column``, ``message``), and ``ValueError``
+/// for a bad override.
 #[pyfunction]
-#[pyo3(signature = (path, **defines))]
+#[pyo3(signature = (path, *, resolution=None, rfilter=None, **defines))]
 fn load_file(
     py: Python<'_>,
     path: PathBuf,
+    resolution: Option<&Bound<'_, PyAny>>,
+    rfilter: Option<&str>,
     defines: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyScene> {
+    let resolution = resolution.map(film_size).transpose()?;
+    let filter = match rfilter {
+        None => None,
+        Some("box") => Some(FilterDesc::Box),
+        // As `radia render --rfilter gaussian`: Mitsuba's default gaussian.
+        Some("gaussian") => Some(FilterDesc::Gaussian { stddev: 0.5 }),
+        Some(other) => {
+            return Err(PyValueError::new_err(format!(
+                "rfilter={other:?}: unknown filter (box or gaussian)"
+            )))
+        }
+    };
     let mut defs = Vec::new();
     for (k, v) in defines.into_iter().flat_map(|d| d.iter()) {
         let value = if v.is_instance_of::<PyBool>() {
@@ -141,13 +161,32 @@ fn load_file(
         defs.push((k.str()?.to_string(), value));
     }
     let loaded = py.detach(|| {
-        load_mitsuba_xml_with_warnings(&path, &defs).map(|(desc, warnings)| {
+        load_mitsuba_xml_with_warnings(&path, &defs).map(|(mut desc, warnings)| {
+            // The overrides as the CLI applies them, before the fingerprint, so that the parts
+            // of a render at another resolution are told apart.
+            if let Some((w, h)) = resolution {
+                desc.film.width = w;
+                desc.film.height = h;
+            }
+            if let Some(f) = filter {
+                desc.film.filter = f;
+            }
+            let size = match resolution {
+                Some(_) => desc.film.check_size(),
+                None => Ok(()),
+            };
             let fingerprint = desc.fingerprint();
-            (Scene::build(desc), fingerprint, warnings)
+            size.map(|()| (Scene::build(desc), fingerprint, warnings))
         })
     });
     match loaded {
-        Ok((scene, fingerprint, warnings)) => {
+        Ok(Err(size)) => {
+            let (w, h) = resolution.unwrap_or_default();
+            Err(PyValueError::new_err(format!(
+                "resolution=({w}, {h}): {size}"
+            )))
+        }
+        Ok(Ok((scene, fingerprint, warnings))) => {
             for w in warnings {
                 warn(py, &w)?;
             }
@@ -169,6 +208,24 @@ fn load_file(
     }
 }
 
+/// ``resolution=``: an int (a square film) or a ``(width, height)`` pair, each at least 1.
+fn film_size(value: &Bound<'_, PyAny>) -> PyResult<(u32, u32)> {
+    let (w, h) = match value.extract::<u32>() {
+        Ok(n) => (n, n),
+        Err(_) => value.extract::<(u32, u32)>().map_err(|_| {
+            PyValueError::new_err(format!(
+                "resolution={value}: expected an int or a (width, height) pair of ints"
+            ))
+        })?,
+    };
+    if w == 0 || h == 0 {
+        return Err(PyValueError::new_err(format!(
+            "resolution=({w}, {h}): width and height must be at least 1"
+        )));
+    }
+    Ok((w, h))
+}
+
 fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
     let message = CString::new(message.replace('\0', " ")).unwrap_or_default();
     PyErr::warn(py, &py.get_type::<PyUserWarning>(), &message, 1)
@@ -188,10 +245,13 @@ fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
 ///
 /// ``spp`` defaults to the scene's (rounded as its sampler requires, with a warning);
 /// ``seed`` is the seed of the sample sequences (0, as ``mi.render``); ``threads`` defaults to
-/// all cores. The GIL is released while rendering; Ctrl-C stops the render and raises
-/// ``KeyboardInterrupt``.
+/// all cores; ``sampler`` overrides the scene's sampler by name, as ``radia render
+/// --sampler``. With ``stats=True`` the result comes as ``(result, RenderStats)``: the rays,
+/// samples and dropped NaN/Inf samples the CLI reports. The GIL is released while rendering;
+/// Ctrl-C stops the render and raises ``KeyboardInterrupt``.
 #[pyfunction]
-#[pyo3(signature = (scene, spp=None, seed=0, threads=None, samples=None, aovs=None))]
+#[pyo3(signature = (scene, spp=None, seed=0, threads=None, samples=None, aovs=None, sampler=None, stats=false))]
+#[allow(clippy::too_many_arguments)] // Python's keyword arguments, each optional
 fn render(
     py: Python<'_>,
     scene: &PyScene,
@@ -200,7 +260,41 @@ fn render(
     threads: Option<usize>,
     samples: Option<(u32, u32)>,
     aovs: Option<&str>,
+    sampler: Option<&str>,
+    stats: bool,
 ) -> PyResult<Py<PyAny>> {
+    let result = render_result(py, scene, spp, seed, threads, samples, aovs, sampler)?;
+    if !stats {
+        return Ok(result.value);
+    }
+    let stats = PyRenderStats {
+        spp: result.stats.spp,
+        samples: result.stats.samples,
+        rays: result.stats.rays,
+        invalid_samples: result.stats.invalid_samples,
+        seconds: result.seconds,
+    };
+    Ok((result.value, stats).into_pyobject(py)?.into_any().unbind())
+}
+
+/// What [`render`] returns, with the statistics it returns on request.
+struct Rendered {
+    value: Py<PyAny>,
+    stats: RenderStats,
+    seconds: f64,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn render_result(
+    py: Python<'_>,
+    scene: &PyScene,
+    spp: Option<u32>,
+    seed: u64,
+    threads: Option<usize>,
+    samples: Option<(u32, u32)>,
+    aovs: Option<&str>,
+    sampler: Option<&str>,
+) -> PyResult<Rendered> {
     let aov = match (aovs, &scene.scene.integrator.aov) {
         (None, own) => own.clone(),
         (Some(_), Some(_)) => {
@@ -222,7 +316,15 @@ fn render(
             scene.path
         )));
     }
-    let sampler = scene.scene.sampler.kind;
+    let sampler = match sampler {
+        None => scene.scene.sampler.kind,
+        Some(name) => SamplerKind::from_name(name).ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "sampler={name:?}: unknown sampler (one of: {})",
+                SamplerKind::NAMES.join(", ")
+            ))
+        })?,
+    };
     let asked = spp.unwrap_or(scene.scene.sampler.sample_count).max(1);
     let options = RenderOptions {
         spp: sampler.round_sample_count(asked),
@@ -258,16 +360,26 @@ fn render(
                 .map_err(|e| PyRuntimeError::new_err(format!("cannot start {n} threads: {e}")))?,
         ),
     };
+    let t_render = Instant::now();
     let out = render_interruptibly(py, scene.scene.clone(), options, range, aov.clone(), pool)?;
+    let seconds = t_render.elapsed().as_secs_f64();
+    let stats = out.stats;
+    let rendered = |value: Py<PyAny>| Rendered {
+        value,
+        stats,
+        seconds,
+    };
     let (w, h) = (scene.scene.film.width, scene.scene.film.height);
     if samples.is_none() {
         let image = image_array(py, out.film.sums(), w, h)?;
         return match (&aov, &out.aovs) {
             (Some(desc), Some(film)) => {
                 let layers = aov_dict(py, desc, film, &out.film.develop())?;
-                Ok((image, layers).into_pyobject(py)?.into_any().unbind())
+                Ok(rendered(
+                    (image, layers).into_pyobject(py)?.into_any().unbind(),
+                ))
             }
-            _ => Ok(image.into_any().unbind()),
+            _ => Ok(rendered(image.into_any().unbind())),
         };
     }
     let identity = RenderIdentity {
@@ -280,7 +392,33 @@ fn render(
         height: h,
     };
     let part = Part::new(identity, out.rendered, out.film.into_sums());
-    Ok(Py::new(py, PyPart { part })?.into_any())
+    Ok(rendered(Py::new(py, PyPart { part })?.into_any()))
+}
+
+/// What a render did (``render(..., stats=True)``): the figures `radia render` prints.
+#[pyclass(name = "RenderStats", module = "radia", frozen, get_all)]
+struct PyRenderStats {
+    /// Samples per pixel rendered (of the range asked for, with ``samples=``).
+    spp: u32,
+    /// Camera samples traced (pixels × spp).
+    samples: u64,
+    /// Rays traced, shadow rays included.
+    rays: u64,
+    /// Samples whose radiance came out NaN or infinite: dropped, as the CLI's "invalid samples
+    /// dropped".
+    invalid_samples: u64,
+    /// Wall time of the render in seconds (the scene was loaded before).
+    seconds: f64,
+}
+
+#[pymethods]
+impl PyRenderStats {
+    fn __repr__(&self) -> String {
+        format!(
+            "<radia.RenderStats: {} spp, {} samples, {} rays, {} invalid samples, {:.3} s>",
+            self.spp, self.samples, self.rays, self.invalid_samples, self.seconds
+        )
+    }
 }
 
 /// The AOV layers ``render`` returns: one (height, width, C) array per layer of
@@ -607,6 +745,7 @@ fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MergeError", py.get_type::<MergeError>())?;
     m.add_class::<PyScene>()?;
     m.add_class::<PyPart>()?;
+    m.add_class::<PyRenderStats>()?;
     m.add_function(wrap_pyfunction!(load_file, m)?)?;
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add_function(wrap_pyfunction!(write_image, m)?)?;

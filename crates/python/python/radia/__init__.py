@@ -4,6 +4,10 @@ sample index and merge the parts exactly, write images.
     import radia
     scene = radia.load_file("scenes/cornell-box.xml", res=64)
     image = radia.render(scene, spp=64)             # float32 (64, 64, 3), linear RGB
+    # Film overrides as `radia render --resolution 32 --rfilter box`; what the render did:
+    small = radia.load_file("scenes/cornell-box.xml", resolution=32, rfilter="box")
+    image, stats = radia.render(small, spp=16, seed=3, sampler="independent", stats=True)
+    stats.invalid_samples, stats.rays                # NaN/Inf samples dropped, rays traced
     radia.write_image(image, "cornell.exr")
 
     # AOVs (Mitsuba's aov integrator string): the image and a dict of layers.
@@ -20,11 +24,12 @@ import warnings as _warnings
 
 import numpy as _np
 
-from ._native import LoadError, MergeError, Part, Scene, load_file, read_part, render
+from ._native import (LoadError, MergeError, Part, RenderStats, Scene, load_file, read_part,
+                      render)
 from . import _native
 
-__all__ = ["LoadError", "MergeError", "Part", "Scene", "load_file", "merge", "read_part",
-           "render", "write_image"]
+__all__ = ["LoadError", "MergeError", "Part", "RenderStats", "Scene", "load_file", "merge",
+           "read_part", "render", "write_image"]
 
 
 def merge(parts, names=None):

@@ -1,8 +1,8 @@
 from typing import Optional, Sequence
 
 from ._native import (LoadError as LoadError, MergeError as MergeError, Part as Part,
-                      Scene as Scene, load_file as load_file, read_part as read_part,
-                      render as render)
+                      RenderStats as RenderStats, Scene as Scene, load_file as load_file,
+                      read_part as read_part, render as render)
 import numpy.typing as npt
 from os import PathLike
 from typing import Union

@@ -1,6 +1,6 @@
 """Type stubs of radia's native module (re-exported by ``radia``)."""
 from os import PathLike
-from typing import Dict, List, Optional, Sequence, Tuple, Union, overload
+from typing import Dict, List, Literal, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -86,29 +86,58 @@ class Part:
     def write(self, path: _Path) -> None:
         """Writes it as a partial EXR (what `radia merge` reads)."""
 
-def load_file(path: _Path, **defines: object) -> Scene:
+def load_file(path: _Path, *, resolution: Union[int, Tuple[int, int], None] = None,
+              rfilter: Optional[str] = None, **defines: object) -> Scene:
     """Loads a Mitsuba 3 XML scene; keyword arguments override its <default> parameters (as
-    Mitsuba's -D). Raises LoadError."""
+    Mitsuba's -D), except resolution (an int or (width, height)) and rfilter ("box" or
+    "gaussian"), which override its film as `radia render --resolution/--rfilter`. Raises
+    LoadError, and ValueError for a bad override."""
+
+class RenderStats:
+    """What a render did: render(..., stats=True) returns it beside the result."""
+    spp: int
+    """Samples per pixel rendered."""
+    samples: int
+    """Camera samples traced."""
+    rays: int
+    """Rays traced, shadow rays included."""
+    invalid_samples: int
+    """NaN/Inf samples dropped (the CLI's "invalid samples dropped")."""
+    seconds: float
+    """Wall time of the render (not the load)."""
+
+_Result = Union[_Image, Part, Tuple[_Image, Dict[str, _Image]]]
 
 @overload
 def render(scene: Scene, spp: Optional[int] = None, seed: int = 0,
            threads: Optional[int] = None, samples: None = None,
-           aovs: None = None) -> Union[_Image, Tuple[_Image, Dict[str, _Image]]]: ...
+           aovs: None = None, sampler: Optional[str] = None,
+           stats: Literal[False] = False) -> Union[_Image, Tuple[_Image, Dict[str, _Image]]]: ...
 @overload
 def render(scene: Scene, spp: Optional[int] = None, seed: int = 0,
            threads: Optional[int] = None, samples: None = None, *,
-           aovs: str) -> Tuple[_Image, Dict[str, _Image]]: ...
+           aovs: str, sampler: Optional[str] = None,
+           stats: Literal[False] = False) -> Tuple[_Image, Dict[str, _Image]]: ...
 @overload
 def render(scene: Scene, spp: Optional[int] = None, seed: int = 0,
-           threads: Optional[int] = None, *, samples: Tuple[int, int]) -> Part: ...
+           threads: Optional[int] = None, *, samples: Tuple[int, int],
+           sampler: Optional[str] = None, stats: Literal[False] = False) -> Part: ...
+@overload
+def render(scene: Scene, spp: Optional[int] = None, seed: int = 0,
+           threads: Optional[int] = None, samples: Optional[Tuple[int, int]] = None,
+           aovs: Optional[str] = None, sampler: Optional[str] = None, *,
+           stats: Literal[True]) -> Tuple[_Result, RenderStats]: ...
 def render(scene: Scene, spp: Optional[int] = None, seed: int = 0,
            threads: Optional[int] = None,
            samples: Optional[Tuple[int, int]] = None,
-           aovs: Optional[str] = None
-           ) -> Union[_Image, Part, Tuple[_Image, Dict[str, _Image]]]:
+           aovs: Optional[str] = None,
+           sampler: Optional[str] = None,
+           stats: bool = False
+           ) -> Union[_Result, Tuple[_Result, RenderStats]]:
     """Renders scene: a float32 (height, width, 3) linear RGB array; with samples=(a, b) only
     sample indices a..b of the spp of every pixel, as a Part. spp defaults to the scene's,
-    seed to 0, threads to all cores. Releases the GIL; Ctrl-C raises KeyboardInterrupt.
+    seed to 0, threads to all cores, sampler to the scene's (a name overrides it, as
+    `radia render --sampler`). Releases the GIL; Ctrl-C raises KeyboardInterrupt.
 
     With AOVs, aovs="dd.y:depth,nn:sh_normal" (Mitsuba's aov integrator string, as
     `radia render --aov`) or a scene whose integrator is `aov`: (image, layers), layers a
@@ -116,7 +145,9 @@ def render(scene: Scene, spp: Optional[int] = None, seed: int = 0,
     with its values: the nested integrator's layer (R, G, B, A) if the scene names one, then
     each AOV (depth: T; position, normals, dp_du, dp_dv: X, Y, Z; uv: U, V; albedo: R, G, B;
     prim_index, shape_index: I). Refused (ValueError) with samples, for a malformed string,
-    and when the scene already has an aov integrator."""
+    and when the scene already has an aov integrator.
+
+    With stats=True: (result, RenderStats), result as above."""
 
 def write_image(array: npt.ArrayLike, path: _Path) -> None:
     """Writes a float32 (height, width, 3) linear RGB array as EXR or PNG (by extension)."""
