@@ -7,7 +7,8 @@ scene against cached high-spp Mitsuba references. See validation/README.md.
 
 SCENE defaults to every scenes/*.xml. Exit status: 0 all scenes pass, 1 a scene
 fails the test, 2 the run could not be made (missing or stale reference,
-missing radia binary, render error).
+radia package missing or stale, missing radia binary, render error). radia renders
+through its Python package (validation/setup builds it), or with --radia PATH the binary.
 """
 import argparse
 import os
@@ -17,8 +18,8 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from radiaval import references  # noqa: E402
-from radiaval.common import (DEFAULT_RADIA, OUT_DIR, REFERENCE_DIR,  # noqa: E402
-                             ValidationError, list_scenes, log, rel_to_repo)
+from radiaval.common import (OUT_DIR, REFERENCE_DIR, ValidationError, list_scenes,  # noqa: E402
+                             log, rel_to_repo)
 
 QUICK = dict(res=64, spp=16, passes=32)
 FULL = dict(res=64, spp=64, passes=32)
@@ -33,7 +34,10 @@ def main(argv=None):
     ap.add_argument("--passes", type=int, help="independent candidate passes (default %d)" % FULL["passes"])
     ap.add_argument("--res", type=int, help="resolution (width = height); a reference at it must exist (default %d)" % FULL["res"])
     ap.add_argument("--threads", type=int, default=2, help="threads for radia and Mitsuba (default 2)")
-    ap.add_argument("--radia", default=DEFAULT_RADIA, help="radia binary (default target/release/radia)")
+    ap.add_argument("--radia", metavar="PATH",
+                    help="render radia's passes with this binary (e.g. target/release/radia), one "
+                         "process per pass (default: the radia Python package that "
+                         "validation/setup builds, the scene loaded once; the same images)")
     ap.add_argument("--candidate", choices=("radia", "mitsuba"), default="radia",
                     help="what to test against the reference: radia, or independent Mitsuba "
                          "passes (a self-check of the instrument; must pass)")

@@ -26,12 +26,15 @@ that share a BSDF into one shape, which renumbers shape_index and prim_index;
 radia, like Mitsuba without that optimisation, numbers shapes in the order the
 scene declares them (1-based, 0 where nothing was hit) and triangles within each.
 
+radia renders through its Python package (validation/setup builds it): the aov scene is
+loaded once and each pass is one radia.render into numpy, whose layers equal the CLI's EXR
+channels bit for bit (tests/test_radia_package_aov.py).
+
 Exit status 0 when every channel of every scene passes, 1 when one fails, 2 when
-a render cannot be made.
+a render cannot be made (or the radia package is missing or stale).
 """
 import argparse
 import os
-import subprocess
 import sys
 import tempfile
 import time
@@ -40,8 +43,8 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from radiaval.common import (DEFAULT_RADIA, REPO_ROOT, check_radia, log, mitsuba,  # noqa: E402
-                             mitsuba_scene_xml, rel_to_repo, set_mitsuba_threads)
+from radiaval.common import (REPO_ROOT, ValidationError, log, mitsuba,  # noqa: E402
+                             mitsuba_scene_xml, radia_package, rel_to_repo, set_mitsuba_threads)
 from radiaval.stats import sidak_alpha, t_critical  # noqa: E402
 
 AOVS = ("dd.y:depth,pos:position,uv:uv,gn:geo_normal,nn:sh_normal,alb:albedo,"
@@ -101,17 +104,31 @@ def render_mitsuba(mi, path, passes):
     return out
 
 
-def render_radia(mi, radia, path, spp, passes, threads, tmp):
-    out = []
-    for seed in range(passes):
-        exr = os.path.join(tmp, f"radia{seed}.exr")
-        cmd = [radia, "render", path, "-q", "-o", exr, "--seed", str(seed), "--spp", str(spp),
-               "--threads", str(threads)]
-        p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        if p.returncode != 0:
-            raise RuntimeError(f"radia failed: {' '.join(cmd)}\n{p.stdout[-2000:]}")
-        out.append(layers(mi.Bitmap(exr)))
+# The channel suffixes of each AOV type, in the order of the EXR's (and Mitsuba's) channels.
+SUFFIXES = {"depth": "T", "position": "XYZ", "uv": "UV", "geo_normal": "XYZ",
+            "sh_normal": "XYZ", "albedo": "RGB", "dp_du": "XYZ", "dp_dv": "XYZ",
+            "shape_index": "I", "prim_index": "I"}
+
+
+def radia_channels(layers):
+    """{channel name: (H, W) float64} of radia.render's layers, named as layers() names
+    Mitsuba's: NAME.SUFFIX; the nested integrator's layer (`image`) is R, G, B, A."""
+    suffixes = {name: SUFFIXES[kind] for name, kind in (p.split(":") for p in AOVS.split(","))}
+    out = {}
+    for name, a in layers.items():
+        s = suffixes.get(name, "RGBA")
+        if a.shape[-1] != len(s):
+            raise RuntimeError(f"radia's layer {name} has {a.shape[-1]} channels, expected {s}")
+        for c, suffix in enumerate(s):
+            out[f"{name}.{suffix}"] = a[..., c].astype(np.float64)
     return out
+
+
+def render_radia(radia, path, spp, passes, threads):
+    """K passes of the aov scene with the radia package: loaded once, (image, layers) a pass."""
+    scene = radia.load_file(path)
+    return [radia_channels(radia.render(scene, spp=spp, seed=seed, threads=threads)[1])
+            for seed in range(passes)]
 
 
 def compare(radia_passes, mts_passes, alpha):
@@ -143,12 +160,15 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("scenes", nargs="*", help="scenes (default: the Cornell box and textured.xml)")
     ap.add_argument("--quick", action="store_true", help="%(res)dx%(res)d, %(passes)d passes of %(spp)d spp" % QUICK)
-    ap.add_argument("--radia", default=DEFAULT_RADIA)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--alpha", type=float, default=0.01, help="family-wise level (default 0.01)")
     a = ap.parse_args(argv)
     mode = QUICK if a.quick else FULL
-    radia = check_radia(a.radia)
+    try:
+        radia = radia_package()
+    except ValidationError as e:
+        log(f"compare_aov: {e}")
+        return 2
     mi = mitsuba("scalar_rgb")
     set_mitsuba_threads(a.threads)
     failed = errors = 0
@@ -159,7 +179,7 @@ def main(argv=None):
             try:
                 path = aov_scene(s, mode["res"], mode["spp"], tmp)
                 mts = render_mitsuba(mi, path, mode["passes"])
-                rad = render_radia(mi, radia, path, mode["spp"], mode["passes"], a.threads, tmp)
+                rad = render_radia(radia, path, mode["spp"], mode["passes"], a.threads)
                 rows, t_crit = compare(rad, mts, a.alpha)
             except Exception as e:
                 log(f"ERROR  {rel_to_repo(s)}: {type(e).__name__}: {e}")

@@ -35,9 +35,8 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from radiaval import stats  # noqa: E402
-from radiaval.common import (DEFAULT_RADIA, OUT_DIR, REF_SEED_BASE,  # noqa: E402
-                             MitsubaRenderer, RadiaRenderer, ValidationError, log,
-                             mitsuba)
+from radiaval.common import (OUT_DIR, REF_SEED_BASE, MitsubaRenderer,  # noqa: E402
+                             ValidationError, log, make_radia_renderer, mitsuba)
 
 SCENE = """<?xml version="1.0" encoding="utf-8"?>
 <!-- Normalized Phong and Blinn-Phong (radia's phong and blinnphong): four spheres filling
@@ -240,7 +239,8 @@ def main(argv=None):
     ap.add_argument("--ref-passes", type=int, help="Mitsuba passes (default 64; quick 32)")
     ap.add_argument("--ref-variant", default="llvm_ad_rgb")
     ap.add_argument("--threads", type=int, default=2)
-    ap.add_argument("--radia", default=DEFAULT_RADIA)
+    ap.add_argument("--radia", metavar="PATH",
+                    help="render with this radia binary (default: the radia Python package)")
     ap.add_argument("--alpha", type=float, default=0.01)
     ap.add_argument("--tolerance", type=float, default=0.0025)
     a = ap.parse_args(argv)
@@ -271,7 +271,7 @@ def main(argv=None):
         ref_mean, ref_var, ref_k = stats.pass_moments(ref)
 
         log(f"== radia: {a.passes} passes x {spp} spp")
-        r = RadiaRenderer(scene, a.res, spp, binary=a.radia, threads=a.threads)
+        r = make_radia_renderer(scene, a.res, spp, binary=a.radia, threads=a.threads)
         cand = r.passes(a.passes, seed0=0)
     except ValidationError as e:
         log(f"ERROR  {e}")

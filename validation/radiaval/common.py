@@ -1,5 +1,6 @@
 """Paths, Mitsuba set-up, scene hashing, image I/O and pass rendering shared by
-compare.py and benchmark.py."""
+compare.py and benchmark.py: radia's passes with the Python package (PackageRenderer, one
+load, no files) or the binary (RadiaRenderer, one process per pass, as benchmark.py times it)."""
 import glob
 import hashlib
 import json
@@ -9,6 +10,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import warnings
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -353,6 +355,94 @@ class RadiaRenderer:
                 progress(i + 1, k)
         self.passes_time = time.perf_counter() - t0
         return out
+
+
+class PackageRenderer:
+    """Renders passes of one scene with the radia Python package (crates/python): the scene
+    is loaded once with the film size and filter overridden (``radia.load_file(...,
+    resolution=, rfilter=)``, as RadiaRenderer's --resolution and --rfilter), then each pass
+    is one ``radia.render`` into a numpy array, with the sampler overridden by name if given:
+    no process and no EXR per pass. The images are RadiaRenderer's bit for bit at the same
+    seed and spp (tests/test_radia_package.py: radia.render equals the CLI). self.infos has
+    one dict per pass with RadiaRenderer's keys; the load is counted in the first."""
+
+    def __init__(self, scene_path, res, spp, threads=None, extra_defines=(), bias=1.0,
+                 sampler=None, rfilter="box"):
+        self.radia = radia_package()
+        self.scene_path, self.res, self.spp = scene_path, res, spp
+        self.threads, self.sampler, self.bias = threads, sampler, bias
+        defines = {}
+        for d in extra_defines:
+            k, sep, v = d.partition("=")
+            if not sep:
+                raise ValidationError(f"-D expects NAME=VALUE, got {d!r}")
+            defines[k.strip()] = v
+        t0 = time.perf_counter()
+        try:
+            self.scene = self.radia.load_file(scene_path, resolution=res, rfilter=rfilter,
+                                              **defines)
+        except (self.radia.LoadError, ValueError) as e:
+            raise ValidationError(f"radia cannot load {scene_path}: {e}")
+        self.load_s = time.perf_counter() - t0
+        self.invalid = 0
+        self.infos = []
+
+    def render(self, seed, spp=None):
+        spp = spp or self.spp
+        t0 = time.perf_counter()
+        with warnings.catch_warnings():
+            # "the stratified sampler renders 9 spp, not 8": every pass would say it;
+            # infos[-1]["spp"] records it (as for the binary, whose stderr is not shown).
+            warnings.filterwarnings("ignore", message="the .* sampler renders")
+            arr, st = self.radia.render(self.scene, spp=spp, seed=seed, threads=self.threads,
+                                        sampler=self.sampler, stats=True)
+        self.last_wall = time.perf_counter() - t0
+        info = dict(spp=st.spp, render_s=st.seconds, wall_s=self.last_wall,
+                    load_s=0.0 if self.infos else self.load_s,
+                    sampler=self.sampler or self.scene.sampler,
+                    mrays_s=st.rays / st.seconds / 1e6 if st.seconds > 0 else None,
+                    invalid=st.invalid_samples)
+        info["output"] = (f"radia (package): {self.res}x{self.res}, {st.spp} spp, "
+                          f"{st.seconds:.3f} s render, {st.invalid_samples} invalid samples dropped")
+        self.infos.append(info)
+        self.invalid += st.invalid_samples
+        if self.bias != 1.0:
+            arr = arr * np.float32(self.bias)
+        return arr
+
+    passes = RadiaRenderer.passes
+
+
+def radia_package():
+    """The radia Python package, refused with the remedy when it is missing or was built from
+    other sources than the checkout's (validation/setup stamps the venv with the hash of the
+    sources it built; radiaval/sources.py computes both)."""
+    try:
+        import radia
+    except ImportError as e:
+        raise ValidationError(
+            f"the radia Python package is not installed in {sys.prefix} ({e}): run "
+            "`bash validation/setup` (it builds crates/python into validation/.venv), or pass "
+            "--radia target/release/radia to render with the binary")
+    stamp = os.path.join(sys.prefix, ".radia-package-stamp")
+    if os.path.exists(stamp):
+        from .sources import source_hash
+        with open(stamp) as f:
+            built = f.read().strip()
+        if built != source_hash(REPO_ROOT):
+            raise ValidationError(
+                f"the radia Python package in {sys.prefix} was built from other sources than "
+                f"{REPO_ROOT}'s crates/ now: run `bash validation/setup` to rebuild it, or pass "
+                "--radia target/release/radia to render with the binary")
+    return radia
+
+
+def make_radia_renderer(scene_path, res, spp, binary=None, **kw):
+    """The package's renderer, or the binary's when a binary is named (benchmark.py times
+    the binary; tests/fake_radia.py stands in for it)."""
+    if binary is None:
+        return PackageRenderer(scene_path, res, spp, **kw)
+    return RadiaRenderer(scene_path, res, spp, binary=binary, **kw)
 
 
 # ---------------------------------------------------------------------------

@@ -7,8 +7,8 @@ import time
 import numpy as np
 
 from . import stats
-from .common import (DEFAULT_RADIA, OUT_DIR, MitsubaRenderer, RadiaRenderer,
-                     log, rel_to_repo, write_exr)
+from .common import (OUT_DIR, MitsubaRenderer, log, make_radia_renderer, rel_to_repo,
+                     write_exr)
 from .references import load_reference
 
 PARITY_MEAN_TOL = 0.01      # image mean within 1%
@@ -39,15 +39,15 @@ def parity_figures(cand, mts, ref_mean):
     return out
 
 
-def run_scene(scene_path, res, spp, passes, candidate="radia", radia=DEFAULT_RADIA,
+def run_scene(scene_path, res, spp, passes, candidate="radia", radia=None,
               threads=2, bias=1.0, parity=True, parity_variant="scalar_rgb",
               ref_dir=None, out_dir=OUT_DIR, alpha=0.01, tolerance=0.0025,
               candidate_scene=None, cand_label=None, candidate_defines=(),
               candidate_sampler=None):
     """Compare one scene; returns a dict (also written to out_dir/NAME/result.json).
 
-    candidate: "radia" (the binary) or "mitsuba" (independent Mitsuba passes: the
-    self-check that must pass). bias multiplies the candidate's images (to show
+    candidate: "radia" (the Python package, or the binary at the path radia names) or
+    "mitsuba" (independent Mitsuba passes: the self-check that must pass). bias multiplies the candidate's images (to show
     the test fails). candidate_scene renders the candidate from another XML
     (e.g. with a slightly wrong albedo) against the reference of scene_path.
     candidate_sampler names the candidate's sampler (None: the scene's own).
@@ -78,8 +78,8 @@ def run_scene(scene_path, res, spp, passes, candidate="radia", radia=DEFAULT_RAD
     t0 = time.perf_counter()
     info = {}
     if candidate == "radia":
-        r = RadiaRenderer(cscene, res, spp, binary=radia, threads=threads, bias=bias,
-                          extra_defines=candidate_defines, sampler=candidate_sampler)
+        r = make_radia_renderer(cscene, res, spp, binary=radia, threads=threads, bias=bias,
+                                extra_defines=candidate_defines, sampler=candidate_sampler)
         cand = r.passes(passes, seed0=0, progress=prog("radia"))
         info = dict(invalid_samples=r.invalid,
                     candidate_spp_rendered=r.infos[-1].get("spp") if r.infos else None,

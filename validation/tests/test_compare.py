@@ -18,7 +18,7 @@ import numpy as np
 
 from .helpers import NODEFAULTS, RES, SENSOR_ONLY, SIMPLE, VALIDATION, shared_ref_dir, tmpdir
 from radiaval import stats
-from radiaval.common import (DEFAULT_RADIA, ValidationError, derive_scene, load_mitsuba_scene,
+from radiaval.common import (ValidationError, derive_scene, load_mitsuba_scene,
                              mitsuba, mitsuba_scene_spp, parse_radia_output, scene_files)
 from radiaval.core import run_scene
 from radiaval.references import load_reference, make_reference
@@ -331,10 +331,9 @@ def _have_reference(scene):
     return os.path.exists(scene) and entry_key(scene, 64) in load_manifest()["references"]
 
 
-@unittest.skipUnless(os.path.exists(DEFAULT_RADIA), "target/release/radia not built")
 class RealRadia(unittest.TestCase):
-    """The teeth with the real binary on the real scenes (committed references),
-    at compare.py --quick settings."""
+    """The teeth with the real renderer (the radia Python package, as compare.py renders by
+    default) on the real scenes (committed references), at compare.py --quick settings."""
 
     def test_radia_on_fixture(self):
         r = run_scene(SIMPLE, RES, SPP, PASSES, candidate="radia", ref_dir=shared_ref_dir(),

@@ -23,7 +23,7 @@ import unittest
 
 from .helpers import VALIDATION
 from radiaval import stats
-from radiaval.common import RadiaRenderer
+from radiaval.common import PackageRenderer
 from radiaval.transform import snap_scene, transform_scene
 
 CORNELL = os.path.join(os.path.dirname(VALIDATION), "scenes", "cornell-box.xml")
@@ -37,13 +37,13 @@ class ScaleInvarianceTest(unittest.TestCase):
         cls.dir = tmpdir_class(cls)
         snapped = snap_scene(CORNELL, os.path.join(cls.dir, "snapped"))
         cls.base = transform_scene(snapped, os.path.join(cls.dir, "base"), near_clip=NEAR_CLIP)
-        ref = RadiaRenderer(cls.base, RES, SPP, sampler="independent").passes(PASSES, seed0=0)
+        ref = PackageRenderer(cls.base, RES, SPP, sampler="independent").passes(PASSES, seed0=0)
         cls.ref_mean, cls.ref_var, cls.ref_k = stats.pass_moments(ref)
 
     def check(self, scale, translate, levels=None):
         moved = transform_scene(self.base, os.path.join(self.dir, f"{scale:g}-{translate[0]:g}"),
                                 scale, translate, near_clip=NEAR_CLIP)
-        r = RadiaRenderer(moved, RES, SPP, sampler="independent")
+        r = PackageRenderer(moved, RES, SPP, sampler="independent")
         cand = r.passes(PASSES, seed0=1000)
         self.assertEqual(r.invalid, 0, "invalid samples dropped")
         result = stats.compare_to_reference(cand, self.ref_mean, self.ref_var, self.ref_k)
