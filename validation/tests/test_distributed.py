@@ -52,10 +52,24 @@ class DistributedTest(unittest.TestCase):
         with open(other, "w") as f:
             f.write(xml)
         t0 = time.perf_counter()
+        infos = []
         frames = rd.render_frames([SIMPLE, other], spp=64, seed=3, defines={"res": 24},
                                   pieces=4, workers=2,
-                                  outputs=os.path.join(d, "frame-{:02d}.exr"))
+                                  outputs=os.path.join(d, "frame-{:02d}.exr"),
+                                  on_piece=lambda f, info: infos.append((f, info)))
         print(f"2 frames x 4 pieces: {time.perf_counter() - t0:.1f} s", file=sys.stderr)
+        # What a piece cost besides its render (validation/distributed_scaling.py reports it):
+        # each worker's load of each frame's scene once, with its first piece of that frame.
+        self.assertEqual(len(infos), 8)
+        loads = {}
+        for f, i in infos:
+            self.assertGreater(i["render_secs"], 0.0)
+            self.assertGreaterEqual(i["merge_secs"], 0.0)
+            self.assertGreaterEqual(i["arrived_at"], i["finished_at"])   # one clock, one machine
+            if i["load_secs"] > 0:
+                loads[(f, i["pid"])] = loads.get((f, i["pid"]), 0) + 1
+        self.assertEqual(set(loads.values()), {1})
+        self.assertEqual(set(loads), {(f, i["pid"]) for f, i in infos})
         for path, img in zip([SIMPLE, other], frames):
             whole = radia.render(radia.load_file(path, res=24), spp=64, seed=3)
             # Box filter, pieces of whole passes: the merge is bit-exact.

@@ -57,6 +57,7 @@ def _worker_class(ray):
         def __init__(self, threads):
             self.threads = threads
             self.scenes = {}
+            self.unreported = set()   # scenes whose load time no piece has reported yet
             with warnings.catch_warnings():   # Ray 2.60 warns from inside this property
                 warnings.simplefilter("ignore", DeprecationWarning)
                 self.restarted = ray.get_runtime_context().was_current_actor_reconstructed
@@ -73,7 +74,17 @@ def _worker_class(ray):
                 t0 = time.perf_counter()
                 self.scenes[key] = (_native.load_file(path, **dict(defines)),
                                     time.perf_counter() - t0)
+                self.unreported.add(key)
             return self.scenes[key]
+
+        def _report_load(self, path, defines):
+            """The load time of the scene with the first piece of it this worker renders (it
+            may have loaded it for info()), 0 with the others."""
+            key = (path, defines)
+            if key in self.unreported:
+                self.unreported.discard(key)
+                return self.scenes[key][1]
+            return 0.0
 
         def info(self, path, defines, spp):
             scene, load_secs = self._scene(path, defines)
@@ -86,6 +97,8 @@ def _worker_class(ray):
             part = _native.render(scene, spp=spp, seed=seed, threads=self.threads,
                                   samples=samples)
             return frame, part, {"pid": os.getpid(), "render_secs": time.perf_counter() - t0,
+                                 "load_secs": self._report_load(path, defines),
+                                 "finished_at": time.time(),
                                  "restarted": self.restarted, "samples": samples}
 
     return RadiaWorker
@@ -139,8 +152,13 @@ def render_frames(scenes, spp=None, seed=0, *, defines=None, outputs=None, piece
     address: passed to ``ray.init`` if Ray is not initialised yet (None: a local cluster).
     progress: print progress to stderr.
     max_restarts, max_task_retries: Ray's recovery of dead actors and of their pieces.
-    on_piece: called as ``on_piece(frame, info)`` on the driver when a piece arrives
-        (info: pid, render_secs, restarted, samples).
+    on_piece: called as ``on_piece(frame, info)`` on the driver when a piece arrives and is
+        merged. info: pid, samples, restarted; render_secs (the render in the worker),
+        load_secs (this worker's load of the scene, with the first piece of it the worker
+        renders; 0 with the others),
+        finished_at and arrived_at (``time.time()`` at the end of the task in the worker and
+        when the driver had the piece: their difference is the transfer, on one clock only on
+        one machine), merge_secs (merging it on the driver).
     """
     ray = _import_ray()
     if not ray.is_initialized():
@@ -185,9 +203,12 @@ def _run(ray, actors, paths, defs, spp, seed, outputs, pieces, log, progress, on
     done = 0
     while pool.has_next():
         f, part, info = pool.get_next_unordered()
+        info["arrived_at"] = time.time()
         done += 1
         frame = frames[f]
+        t_merge = time.perf_counter()
         frame.add(part)
+        info["merge_secs"] = time.perf_counter() - t_merge
         if info["restarted"]:
             log(f"frame {f} samples {info['samples'][0]}..{info['samples'][1]}: rendered by a "
                 f"restarted worker (pid {info['pid']}), a retry")
