@@ -32,15 +32,19 @@ CORNELL = os.path.join(REPO_ROOT, "scenes", "cornell-box.xml")
 
 
 def cli_wall(binary, scene, res, spp, seed, threads, out):
-    """Wall time of one `radia render` process, load and write included."""
+    """Wall and CPU (user + system) seconds of one `radia render` process, load and write
+    included. CPU over wall below the thread count says another process had the cores."""
     cmd = [binary, "render", scene, "-q", "-D", f"res={res}", "--spp", str(spp),
            "--seed", str(seed), "--threads", str(threads), "-o", out]
     t0 = time.perf_counter()
-    p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    output = p.stdout.read()
+    _, status, usage = os.wait4(p.pid, 0)
+    p.returncode = os.waitstatus_to_exitcode(status)
     wall = time.perf_counter() - t0
     if p.returncode != 0:
-        raise SystemExit(f"radia failed: {' '.join(cmd)}\n{p.stdout[-2000:]}")
-    return wall
+        raise SystemExit(f"radia failed: {' '.join(cmd)}\n{output[-2000:]}")
+    return wall, usage.ru_utime + usage.ru_stime
 
 
 def distributed_run(rd, scene, res, spp, seed, pieces, workers):
@@ -83,12 +87,14 @@ def main(argv=None):
     ray_init = time.perf_counter() - t0
 
     walls = {k: [] for k in ("t1", "t2", "w1", "w2")}
+    cpus = {"t1": [], "t2": []}
     tasks = {1: [], 2: []}
     image = None
     for r in range(a.repeats):
         for threads in (1, 2):
-            walls[f"t{threads}"].append(cli_wall(binary, scene, a.res, a.spp, a.seed, threads,
-                                                 cli_out))
+            wall, cpu = cli_wall(binary, scene, a.res, a.spp, a.seed, threads, cli_out)
+            walls[f"t{threads}"].append(wall)
+            cpus[f"t{threads}"].append(cpu)
         for workers in (1, 2):
             wall, image, infos = distributed_run(rd, scene, a.res, a.spp, a.seed, a.pieces,
                                                  workers)
@@ -125,23 +131,32 @@ def main(argv=None):
         return med(out)
 
     m = {k: med(v) for k, v in walls.items()}
+    c = {k: med(v) for k, v in cpus.items()}
+
+    def worker_cpu(workers):
+        """Per run, the render CPU seconds of all pieces; the median over runs."""
+        return med([sum(i["render_cpu_secs"] for i in run) for run in tasks[workers]])
     n_pieces = len(tasks[1][0])
     print(f"\n{name} at {a.res}x{a.res}, {a.spp} spp, seed {a.seed}; {n_pieces} pieces; "
           f"medians of {a.repeats} runs; {os.cpu_count()} CPUs; ray.init {ray_init:.1f} s "
           "(not counted)\n")
-    print("| run | wall s | speed-up |")
-    print("| --- | ---: | ---: |")
-    print(f"| `radia render --threads 1` (process: load, render, write) | {m['t1']:.2f} | 1.00 |")
-    print(f"| `radia render --threads 2` | {m['t2']:.2f} | {m['t1'] / m['t2']:.2f} |")
-    print(f"| radia.distributed, 1 worker × 1 thread | {m['w1']:.2f} | "
-          f"{m['t1'] / m['w1']:.2f} |")
-    print(f"| radia.distributed, 2 workers × 1 thread | {m['w2']:.2f} | "
-          f"{m['t1'] / m['w2']:.2f} (× {m['w1'] / m['w2']:.2f} over 1 worker) |")
+    print("| run | wall s | CPU s | speed-up (wall) |")
+    print("| --- | ---: | ---: | ---: |")
+    print(f"| `radia render --threads 1` (process: load, render, write) | {m['t1']:.2f} | "
+          f"{c['t1']:.2f} | 1.00 |")
+    print(f"| `radia render --threads 2` | {m['t2']:.2f} | {c['t2']:.2f} | "
+          f"{m['t1'] / m['t2']:.2f} |")
+    print(f"| radia.distributed, 1 worker × 1 thread | {m['w1']:.2f} | {worker_cpu(1):.2f} "
+          f"(renders) | {m['t1'] / m['w1']:.2f} |")
+    print(f"| radia.distributed, 2 workers × 1 thread | {m['w2']:.2f} | {worker_cpu(2):.2f} "
+          f"(renders) | {m['t1'] / m['w2']:.2f} (× {m['w1'] / m['w2']:.2f} over 1 worker) |")
     print()
     print("| per task (median) | 1 worker | 2 workers |")
     print("| --- | ---: | ---: |")
-    print(f"| render of the piece ({a.spp // max(1, n_pieces)} spp) in the worker | "
+    print(f"| render of the piece ({a.spp // max(1, n_pieces)} spp) in the worker, wall | "
           f"{per_task(1, 'render_secs'):.3f} s | {per_task(2, 'render_secs'):.3f} s |")
+    print(f"| the same, CPU | {per_task(1, 'render_cpu_secs'):.3f} s | "
+          f"{per_task(2, 'render_cpu_secs'):.3f} s |")
     print(f"| scene load in the worker (once per worker) | {loads(1):.3f} s | {loads(2):.3f} s |")
     print(f"| transfer of the piece to the driver ({piece_mb:.2f} MB pickled) | "
           f"{transfer(1) * 1e3:.1f} ms | {transfer(2) * 1e3:.1f} ms |")

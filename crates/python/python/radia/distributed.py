@@ -93,10 +93,11 @@ def _worker_class(ray):
 
         def render(self, frame, path, defines, spp, seed, samples):
             scene, _ = self._scene(path, defines)
-            t0 = time.perf_counter()
+            t0, cpu0 = time.perf_counter(), time.process_time()
             part = _native.render(scene, spp=spp, seed=seed, threads=self.threads,
                                   samples=samples)
             return frame, part, {"pid": os.getpid(), "render_secs": time.perf_counter() - t0,
+                                 "render_cpu_secs": time.process_time() - cpu0,
                                  "load_secs": self._report_load(path, defines),
                                  "finished_at": time.time(),
                                  "restarted": self.restarted, "samples": samples}
@@ -153,7 +154,8 @@ def render_frames(scenes, spp=None, seed=0, *, defines=None, outputs=None, piece
     progress: print progress to stderr.
     max_restarts, max_task_retries: Ray's recovery of dead actors and of their pieces.
     on_piece: called as ``on_piece(frame, info)`` on the driver when a piece arrives and is
-        merged. info: pid, samples, restarted; render_secs (the render in the worker),
+        merged. info: pid, samples, restarted; render_secs and render_cpu_secs (the render
+        in the worker: wall and CPU seconds of its process),
         load_secs (this worker's load of the scene, with the first piece of it the worker
         renders; 0 with the others),
         finished_at and arrived_at (``time.time()`` at the end of the task in the worker and
