@@ -1,7 +1,7 @@
 //! The typed scene description: what a loader (Mitsuba XML, glTF) produces and
 //! [`crate::Scene::build`] consumes. Plain data in world space; no strings left to compare.
 
-use glam::{Affine3A, Vec2, Vec3};
+use glam::{Affine3A, Vec2, Vec3, Vec4};
 use radia_bsdf::{Bsdf, Texture};
 use radia_math::Spectrum;
 use radia_sampling::SamplerKind;
@@ -167,6 +167,11 @@ pub struct Mesh {
     pub normals: Option<Vec<Vec3>>,
     /// Per-vertex texture coordinates.
     pub uvs: Option<Vec<Vec2>>,
+    /// Per-vertex tangents of a normal-mapped glTF primitive (glTF's `TANGENT`, §3.7.2.1):
+    /// xyz the unit tangent, w = ±1 the sign of the bitangent, cross(normal, xyz)·w. When
+    /// present they, not ∂p/∂u, orient the shading frame (see [`crate::shape`]); `None`
+    /// for every other mesh, which keeps the ∂p/∂u frame of Mitsuba.
+    pub tangents: Option<Vec<Vec4>>,
     /// Counter-clockwise triangles: the geometric normal is (p1 − p0) × (p2 − p0).
     pub indices: Vec<[u32; 3]>,
     /// Mitsuba's `flip_normals`: the geometric and shading normals are negated.

@@ -196,7 +196,7 @@ impl Shape {
         d: Vec3,
     ) -> SurfaceInteraction {
         let mut face = 0;
-        let (p, p_error, n, sh_n, dpdu, dpdv, uv) = match (&self.kind, prim) {
+        let (p, p_error, n, sh_n, dpdu, dpdv, uv, tangent) = match (&self.kind, prim) {
             (ShapeKind::Mesh(mesh), Primitive::Triangle { p: v, face: f, .. }) => {
                 face = *f;
                 let idx = mesh.indices[face as usize];
@@ -249,7 +249,11 @@ impl Shape {
                     }
                     None => (Vec2::new(b1, b2), dp0, dp1),
                 };
-                (p, p_error, n, sh_n, dpdu, dpdv, uv)
+                let tangent = mesh.tangents.as_ref().map(|ts| {
+                    let t = idx.map(|i| ts[i as usize]);
+                    t[0] * b0 + t[1] * b1 + t[2] * b2
+                });
+                (p, p_error, n, sh_n, dpdu, dpdv, uv, tangent)
             }
             (
                 ShapeKind::Sphere {
@@ -283,7 +287,7 @@ impl Shape {
                 if *flip_normals {
                     n = -n;
                 }
-                (p, p_error, n, n, dpdu, dpdv, Vec2::new(u, v))
+                (p, p_error, n, n, dpdu, dpdv, Vec2::new(u, v), None)
             }
             (
                 ShapeKind::Disk {
@@ -313,11 +317,14 @@ impl Shape {
                 let dpdv =
                     to_world.transform_vector3(Vec3::new(-local.y, local.x, 0.0) * (2.0 * PI));
                 let n = if *flip_normals { -*normal } else { *normal };
-                (p, p_error, n, n, dpdu, dpdv, Vec2::new(r, v))
+                (p, p_error, n, n, dpdu, dpdv, Vec2::new(r, v), None)
             }
             _ => unreachable!("primitive and shape kinds always agree"),
         };
-        let frame = Frame::from_normal_tangent(sh_n, dpdu);
+        let frame = match tangent.and_then(|t| tangent_frame(sh_n, t)) {
+            Some(frame) => frame,
+            None => Frame::from_normal_tangent(sh_n, dpdu),
+        };
         SurfaceInteraction {
             p,
             p_error,
@@ -616,6 +623,29 @@ fn disk_point_error(to_world: &Affine3A, local: Vec3) -> Vec3 {
 #[inline]
 fn cone_point_error(ref_p: Vec3, reach: Vec3, center: Vec3, radius: f32) -> Vec3 {
     (ref_p.abs() + reach.abs() + center.abs() + Vec3::splat(radius)) * gamma(16)
+}
+
+/// glTF's tangent frame at a point (§3.7.2.1, §3.9.3) from the interpolated vertex tangent
+/// `t` (xyz the tangent, w the bitangent's sign): s = xyz made orthogonal to the shading
+/// normal `n`, t = cross(n, s)·sign(w), as the Khronos sample viewer builds its TBN. With
+/// w < 0 (mirrored uv) the frame is left-handed, which is what makes a normal map's green
+/// channel tilt towards −(n × s) there. `None` where the tangent is degenerate (zero, along
+/// n, not finite): the ∂p/∂u frame is used instead.
+#[inline]
+fn tangent_frame(n: Vec3, t: glam::Vec4) -> Option<Frame> {
+    let xyz = t.truncate();
+    let s = xyz - n * n.dot(xyz);
+    let len2 = s.length_squared();
+    if !(len2 > 1e-20) || !len2.is_finite() {
+        return None;
+    }
+    let s = s / len2.sqrt();
+    let sign = if t.w < 0.0 { -1.0 } else { 1.0 };
+    Some(Frame {
+        s,
+        t: n.cross(s) * sign,
+        n,
+    })
 }
 
 #[inline]

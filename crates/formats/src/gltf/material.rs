@@ -21,13 +21,19 @@
 //! colour's (else the first textured slot's) set, with a warning.
 //!
 //! Where radia departs from the specification, and why:
-//! - **Normal-map tangents.** §3.7.2.1 defines the tangent space by the TANGENT attribute,
-//!   else by MikkTSpace. radia's `normalmap` (Mitsuba's) uses the shading frame of each
-//!   point, whose tangent is ∂p/∂u made orthogonal to the shading normal and whose
-//!   bitangent is n × t: glTF's bitangent = cross(normal, tangent.xyz)·w with w = 1. This is
-//!   MikkTSpace's frame on a surface whose uv are not mirrored and whose tangents do not
-//!   vary across a triangle (planes, and meshes fine enough that the per-triangle ∂p/∂u
-//!   and MikkTSpace's per-vertex average agree); TANGENT attributes are not read yet.
+//! - **Normal-map tangents.** §3.7.2.1 defines the tangent space by the TANGENT attribute
+//!   (xyz the tangent, w = ±1), else by MikkTSpace. Primitives whose material has a
+//!   `normalTexture` carry per-vertex tangents (`Mesh::tangents`, see `tangents.rs`): the
+//!   file's TANGENT, or MikkTSpace's computed from the positions, normals (face normals
+//!   without NORMAL) and the normal texture's uv set. At a hit the shading frame is then
+//!   glTF's (and the Khronos sample viewer's): s = the interpolated tangent made orthogonal
+//!   to the shading normal n, t = cross(n, s)·w, so the map's green channel tilts towards
+//!   −cross(n, s) where w = −1 (mirrored uv). radia's `normalmap` (Mitsuba's) perturbs
+//!   within that frame. A mirroring node transform multiplies w by the sign of its
+//!   determinant, so that the bitangent keeps following the mapped +v. Primitives without a
+//!   normal map, and every Mitsuba mesh, keep the ∂p/∂u frame and carry no tangents; a
+//!   normal-mapped primitive without uv (no MikkTSpace possible) falls back to it with a
+//!   warning.
 //! - **Back faces of single-sided materials.** A rasteriser culls them (§3.9.5): they are
 //!   invisible. radia has no pass-through surface yet (Mitsuba's `null`/`mask`, issue #10),
 //!   so they are black and opaque, like Mitsuba's one-sided BSDFs. A closed mesh, the usual
@@ -58,6 +64,9 @@ pub struct MaterialDesc {
     pub cut_out: bool,
     /// The uv set (`TEXCOORD_n`) the material's textures read; `None` without textures.
     pub tex_coord: Option<u32>,
+    /// The material has a `normalTexture`: its primitives carry tangents (`TANGENT`, else
+    /// MikkTSpace's).
+    pub normal_mapped: bool,
 }
 
 /// The BSDF of glTF's metallic-roughness model with these factors (one-sided).
@@ -236,5 +245,6 @@ fn build(
         emission,
         cut_out,
         tex_coord,
+        normal_mapped: m.normal_texture().is_some(),
     })
 }

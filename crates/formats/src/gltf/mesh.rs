@@ -2,7 +2,8 @@
 
 use super::data::{check_accessor, AccessorSpec, GltfFile};
 use super::nodes::MeshInstance;
-use glam::{DMat3, Vec2, Vec3};
+use super::tangents::{self, Vertices};
+use glam::{DMat3, Vec2, Vec3, Vec4};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use radia_scene::Mesh;
@@ -14,6 +15,9 @@ pub(crate) struct Warnings {
     non_triangles: usize,
     /// Zero-area triangles dropped.
     degenerate: usize,
+    /// Normal-mapped primitives without uvs, or whose MikkTSpace tangents failed: their
+    /// normal maps use the ∂p/∂u frame.
+    no_tangents: usize,
 }
 
 impl Warnings {
@@ -27,19 +31,26 @@ impl Warnings {
         if self.degenerate > 0 {
             warn(format!("{} zero-area triangle(s) dropped", self.degenerate));
         }
+        if self.no_tangents > 0 {
+            warn(format!(
+                "{} normal-mapped primitive(s) without TANGENT got no MikkTSpace tangents (no texture coordinates, or degenerate ones): their normal maps follow the uv derivatives",
+                self.no_tangents
+            ));
+        }
     }
 }
 
 const FLOAT: &[(DataType, bool)] = &[(DataType::F32, false)];
 
 /// The world-space mesh of one primitive of `inst`, with the uv set `TEXCOORD_<tex_coord>`
-/// (if the primitive has it), or `None` for a primitive radia skips (points, lines, no
-/// triangle left).
+/// (if the primitive has it) and, if `normal_mapped`, tangents ([`tangents`]), or `None`
+/// for a primitive radia skips (points, lines, no triangle left).
 pub(crate) fn build_primitive(
     file: &GltfFile,
     inst: &MeshInstance<'_>,
     prim: &gltf::Primitive<'_>,
     tex_coord: u32,
+    normal_mapped: bool,
     warnings: &mut Warnings,
 ) -> Result<Option<Mesh>, String> {
     let at = format!("mesh {} primitive {}", inst.mesh.index(), prim.index());
@@ -67,14 +78,14 @@ pub(crate) fn build_primitive(
         },
     )
     .map_err(fail)?;
-    let positions: Vec<Vec3> = reader
+    let mut positions: Vec<Vec3> = reader
         .read_positions()
         .ok_or_else(|| fail("cannot read POSITION".into()))?
         .map(Vec3::from_array)
         .collect();
     let n = positions.len();
 
-    let normals = match prim.get(&gltf::Semantic::Normals) {
+    let mut normals = match prim.get(&gltf::Semantic::Normals) {
         Some(acc) => {
             check_accessor(
                 file,
@@ -98,7 +109,7 @@ pub(crate) fn build_primitive(
     };
 
     let uv_name = format!("TEXCOORD_{tex_coord}");
-    let uvs = match prim.get(&gltf::Semantic::TexCoords(tex_coord)) {
+    let mut uvs = match prim.get(&gltf::Semantic::TexCoords(tex_coord)) {
         Some(acc) => {
             check_accessor(
                 file,
@@ -158,10 +169,54 @@ pub(crate) fn build_primitive(
         }
         None => (0..n as u32).collect(),
     };
-    let triangles = assemble(mode, &sequence);
+    let mut triangles = assemble(mode, &sequence);
     if triangles.is_empty() {
         return Ok(None);
     }
+
+    // Tangents in object space, for normal-mapped primitives only.
+    let tangents = match (normal_mapped, prim.get(&gltf::Semantic::Tangents)) {
+        (false, _) => None,
+        (true, Some(acc)) => {
+            check_accessor(
+                file,
+                &acc,
+                &AccessorSpec {
+                    what: "TANGENT",
+                    dimensions: &[Dimensions::Vec4],
+                    types: FLOAT,
+                },
+            )
+            .map_err(fail)?;
+            let v: Vec<Vec4> = reader
+                .read_tangents()
+                .ok_or_else(|| fail("cannot read TANGENT".into()))?
+                .map(Vec4::from_array)
+                .collect();
+            same_count(&v, n, "TANGENT").map_err(fail)?;
+            Some(v)
+        }
+        (true, None) => {
+            let corners = uvs.as_deref().and_then(|uv| {
+                tangents::mikktspace_corners(&positions, normals.as_deref(), uv, &triangles)
+            });
+            match corners {
+                Some(c) => Some(tangents::per_vertex(
+                    &c,
+                    &mut triangles,
+                    Vertices {
+                        positions: &mut positions,
+                        normals: normals.as_mut(),
+                        uvs: uvs.as_mut(),
+                    },
+                )),
+                None => {
+                    warnings.no_tangents += 1;
+                    None
+                }
+            }
+        }
+    };
 
     // To world space. A mirroring transform turns counter-clockwise faces clockwise: the
     // specification makes the determinant's sign decide the winding, so reverse it.
@@ -198,6 +253,27 @@ pub(crate) fn build_primitive(
         })
         .transpose()?;
 
+    // Tangents are directions on the surface: they transform by the linear part (the
+    // Khronos sample viewer's `u_ModelMatrix * a_tangent`). The bitangent, cross(n, t)·w,
+    // must follow the mapped texture v direction; a mirroring transform reverses the cross
+    // product of the mapped normal and tangent, so w changes sign with the determinant.
+    let det_sign = if det < 0.0 { -1.0 } else { 1.0 };
+    let tangents = tangents
+        .map(|ts| {
+            ts.iter()
+                .enumerate()
+                .map(|(k, t)| {
+                    if !t.is_finite() {
+                        return Err(fail(format!("vertex {k} has a non-finite TANGENT")));
+                    }
+                    let xyz = (linear * t.truncate().as_dvec3()).normalize_or_zero().as_vec3();
+                    let w = if t.w < 0.0 { -det_sign } else { det_sign };
+                    Ok(xyz.extend(w))
+                })
+                .collect::<Result<Vec<_>, _>>()
+        })
+        .transpose()?;
+
     let mut indices = Vec::with_capacity(triangles.len());
     for t in triangles {
         let t = if det < 0.0 { [t[0], t[2], t[1]] } else { t };
@@ -215,6 +291,7 @@ pub(crate) fn build_primitive(
         positions,
         normals,
         uvs,
+        tangents,
         indices,
         flip_normals: false,
     }))

@@ -21,7 +21,8 @@
 //! - **Meshes** (`mesh.rs`): triangle primitives (`TRIANGLES`, and `TRIANGLE_STRIP`/`FAN`
 //!   unrolled as the specification's §3.7.2.1 defines), indexed or not; positions,
 //!   normals (transformed by the inverse transpose), the uv set the material's textures
-//!   name (`texCoord`, default `TEXCOORD_0`). Without normals the
+//!   name (`texCoord`, default `TEXCOORD_0`), and for normal-mapped primitives tangents
+//!   (`TANGENT`, else MikkTSpace's: `tangents.rs`). Without normals the
 //!   primitive is flat-shaded, as the specification requires. A node whose world
 //!   transform has a negative determinant has its winding reversed (§3.7.2.1), so front
 //!   faces stay counter-clockwise. Point and line primitives have no area: they are
@@ -56,6 +57,7 @@ pub mod lights;
 pub mod material;
 mod mesh;
 mod nodes;
+mod tangents;
 mod textures;
 
 use data::GltfFile;
@@ -131,7 +133,7 @@ pub fn load_gltf_with_warnings(
             }
             let tex_coord = mat.tex_coord.unwrap_or(0);
             let Some(shape) =
-                mesh::build_primitive(&file, inst, &prim, tex_coord, &mut mesh_warnings)
+                mesh::build_primitive(&file, inst, &prim, tex_coord, mat.normal_mapped, &mut mesh_warnings)
                     .map_err(err)?
             else {
                 continue;

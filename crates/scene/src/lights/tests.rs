@@ -69,6 +69,7 @@ fn mesh(positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Geometry {
         positions,
         normals: None,
         uvs: None,
+        tangents: None,
         indices,
         flip_normals: false,
     })

@@ -111,6 +111,7 @@ pub(crate) fn finalize(
             positions,
             normals,
             uvs: raw.uvs,
+            tangents: None,
             indices,
             flip_normals,
         },
