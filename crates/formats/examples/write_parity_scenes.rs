@@ -7,7 +7,9 @@
 //! - `spheres.glb`: a 5 × 5 grid of spheres, metallic 0 … 1 (columns) × roughness 0.1 … 0.9
 //!   (rows), a camera, a point light and a sun;
 //! - `hierarchy.glb`: boxes under a three-level node hierarchy (translation, rotation and
-//!   scale at each level), lit by a spot light and a directional light.
+//!   scale at each level), lit by a spot light and a directional light;
+//! - `tangents.glb` (no XML twin): a striped normal map on two panels with `TANGENT`, the
+//!   right one with v mirrored and w = −1, and on a sphere without `TANGENT` (MikkTSpace's).
 //!
 //! ```text
 //! cargo run -p radia-formats --example write_parity_scenes -- scenes/gltf
@@ -31,6 +33,7 @@ fn main() {
     textured(dir);
     spheres(dir);
     hierarchy(dir);
+    tangents(dir);
 }
 
 fn write_obj(dir: &Path, name: &str, p: &[[f32; 3]], n: &[[f32; 3]], uv: &[[f32; 2]], ix: &[u16]) {
@@ -262,5 +265,82 @@ fn hierarchy(dir: &Path) {
     println!(
         "wrote {}",
         b.write(dir, "hierarchy", Container::Glb).display()
+    );
+}
+
+fn tangents(dir: &Path) {
+    let mut b = GltfBuilder::new();
+    // Horizontal stripes (1 × 8 texels): normals tilted by ±0.45 towards the bitangent.
+    let mut stripes = Vec::new();
+    for k in 0..8 {
+        let y: f32 = if k % 2 == 0 { 0.45 } else { -0.45 };
+        let n = Vec3::new(0.0, y, (1.0 - y * y).sqrt());
+        stripes.extend(
+            ((n + Vec3::ONE) * 127.5)
+                .round()
+                .to_array()
+                .map(|c| c as u8),
+        );
+    }
+    let img = b.image(&png(1, 8, 3, &stripes), "image/png");
+    let tex = b.texture(img, LINEAR, REPEAT, REPEAT);
+    b.push("materials", json!({ "name": "striped", "normalTexture": { "index": tex },
+        "pbrMetallicRoughness": { "baseColorFactor": [0.8, 0.7, 0.6, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.5 } }));
+    let front = [[0.0f32, 0.0, 1.0]; 4];
+    let quad = [0u16, 1, 2, 0, 2, 3];
+    let panel = |x0: f32| {
+        [
+            [x0, -0.7, 0.0],
+            [x0 + 2.0, -0.7, 0.0],
+            [x0 + 2.0, 0.7, 0.0],
+            [x0, 0.7, 0.0],
+        ]
+    };
+    // Left: +v is world +y (the bitangent cross(n, t) with w = 1). Right: v mirrored, +v
+    // is world −y, so w = −1; the stripes' relief is then the left one's mirror image.
+    let mut meshes = Vec::new();
+    for (x0, uv, w) in [
+        (-2.1, [[0.0, 0.0], [1.0, 0.0], [1.0, 2.0], [0.0, 2.0]], 1.0),
+        (
+            0.1,
+            [[0.0, 2.0], [1.0, 2.0], [1.0, 0.0], [0.0, 0.0]],
+            -1.0f32,
+        ),
+    ] {
+        let p = b.floats(&panel(x0).concat(), "VEC3");
+        let n = b.floats(&front.concat(), "VEC3");
+        let t = b.floats(&[[1.0f32, 0.0, 0.0, w]; 4].concat(), "VEC4");
+        let uv = b.floats(&uv.concat(), "VEC2");
+        let i = b.indices(&quad);
+        meshes.push(b.push("meshes", json!({ "primitives": [{ "attributes":
+            { "POSITION": p, "NORMAL": n, "TANGENT": t, "TEXCOORD_0": uv }, "indices": i, "material": 0 }] })));
+    }
+    let (p, n, uv, ix) = uv_sphere(12, 24);
+    let sphere = b.mesh_with_uv(&p, &n, &uv, &ix, 0);
+    b.push("nodes", json!({ "name": "panel w=+1", "mesh": meshes[0] }));
+    b.push("nodes", json!({ "name": "panel w=-1", "mesh": meshes[1] }));
+    b.push(
+        "nodes",
+        json!({ "name": "sphere, MikkTSpace", "mesh": sphere,
+        "translation": [0.0, 1.3, 0.4], "scale": [0.5, 0.5, 0.5] }),
+    );
+    camera(
+        &mut b,
+        Vec3::new(0.0, 0.4, 4.5),
+        Vec3::new(0.0, 0.3, 0.0),
+        0.9,
+    );
+    lights(
+        &mut b,
+        json!([{ "name": "bulb", "type": "point", "intensity": 25.0 }]),
+    );
+    b.push(
+        "nodes",
+        json!({ "name": "bulb", "translation": [0.6, 2.8, 2.0], "extensions": light_node(0) }),
+    );
+    b.scene(&[0, 1, 2, 3, 4]);
+    println!(
+        "wrote {}",
+        b.write(dir, "tangents", Container::Glb).display()
     );
 }

@@ -266,7 +266,9 @@ pub(crate) fn build_primitive(
                     if !t.is_finite() {
                         return Err(fail(format!("vertex {k} has a non-finite TANGENT")));
                     }
-                    let xyz = (linear * t.truncate().as_dvec3()).normalize_or_zero().as_vec3();
+                    let xyz = (linear * t.truncate().as_dvec3())
+                        .normalize_or_zero()
+                        .as_vec3();
                     let w = if t.w < 0.0 { -det_sign } else { det_sign };
                     Ok(xyz.extend(w))
                 })

@@ -132,9 +132,15 @@ pub fn load_gltf_with_warnings(
                 continue;
             }
             let tex_coord = mat.tex_coord.unwrap_or(0);
-            let Some(shape) =
-                mesh::build_primitive(&file, inst, &prim, tex_coord, mat.normal_mapped, &mut mesh_warnings)
-                    .map_err(err)?
+            let Some(shape) = mesh::build_primitive(
+                &file,
+                inst,
+                &prim,
+                tex_coord,
+                mat.normal_mapped,
+                &mut mesh_warnings,
+            )
+            .map_err(err)?
             else {
                 continue;
             };
