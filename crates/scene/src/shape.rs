@@ -636,7 +636,7 @@ fn tangent_frame(n: Vec3, t: glam::Vec4) -> Option<Frame> {
     let xyz = t.truncate();
     let s = xyz - n * n.dot(xyz);
     let len2 = s.length_squared();
-    if !(len2 > 1e-20) || !len2.is_finite() {
+    if !len2.is_finite() || len2 <= 1e-20 {
         return None;
     }
     let s = s / len2.sqrt();
