@@ -500,7 +500,7 @@ impl Accel {
             return Some(Hit { t, prim, bary });
         }
         let wray = WatertightRay::new(ray);
-        let node_ray = wide::NodeRay::new(ray.o, ray.d, ray.t_max);
+        let node_ray = wide::NodeRay::new(ray.o, ray.d);
         let (prim, t) = self.with_stack(|stack| {
             wide::traverse(
                 &self.bvh,
@@ -527,7 +527,7 @@ impl Accel {
             return self.intersect_flat(shapes, ray, true, &mut bary).is_some();
         }
         let wray = WatertightRay::new(ray);
-        let node_ray = wide::NodeRay::new(ray.o, ray.d, ray.t_max);
+        let node_ray = wide::NodeRay::new(ray.o, ray.d);
         self.with_stack(|stack| {
             wide::traverse(
                 &self.bvh,

@@ -171,6 +171,119 @@ fn bvh_agrees_with_brute_force() {
     assert_eq!(leaks, 0, "rays escaped the closed mesh");
 }
 
+/// Rays along the axes and nearly so, over a BVH of many nodes: direction components of
+/// exactly +0.0 and −0.0 (a ray built as `-Vec3::Z` once missed every node: −0.0 was taken as
+/// a positive direction while its reciprocal was negative) and of 10⁻⁹ and 10⁻³⁰ (whose
+/// reciprocals obvhs clamped to 8·10⁶, shrinking the slab interval of a ray travelling far
+/// along a box's face), from origins on the geometry's own coordinate planes and off them.
+/// Closest hit and occlusion must agree with brute force.
+#[test]
+fn axis_aligned_rays_agree_with_brute_force() {
+    let mut rng = Pcg64::seed_from_u64(5);
+    // Axis-aligned unit quads on a grid in three orientations, 20 units across, plus a soup:
+    // many nodes, many boxes with faces on the planes x, y, z = integer.
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    let mut quad = |c: [Vec3; 4]| {
+        let k = positions.len() as u32;
+        positions.extend(c);
+        indices.push([k, k + 1, k + 2]);
+        indices.push([k, k + 2, k + 3]);
+    };
+    for i in -10..10 {
+        for j in -10..10 {
+            let (a, b) = (i as f32, j as f32);
+            if (i + j) % 3 == 0 {
+                quad([
+                    Vec3::new(a, b, 0.0),
+                    Vec3::new(a + 1.0, b, 0.0),
+                    Vec3::new(a + 1.0, b + 1.0, 0.0),
+                    Vec3::new(a, b + 1.0, 0.0),
+                ]);
+            }
+            if (i + 2 * j) % 5 == 0 {
+                quad([
+                    Vec3::new(a, 3.0, b),
+                    Vec3::new(a + 1.0, 3.0, b),
+                    Vec3::new(a + 1.0, 3.0, b + 1.0),
+                    Vec3::new(a, 3.0, b + 1.0),
+                ]);
+                quad([
+                    Vec3::new(-4.0, a, b),
+                    Vec3::new(-4.0, a + 1.0, b),
+                    Vec3::new(-4.0, a + 1.0, b + 1.0),
+                    Vec3::new(-4.0, a, b + 1.0),
+                ]);
+            }
+        }
+    }
+    let shapes = vec![
+        Shape::new(
+            Geometry::Mesh(Mesh {
+                positions,
+                indices,
+                ..Default::default()
+            }),
+            0,
+            None,
+        ),
+        Shape::new(Geometry::Mesh(soup(&mut rng, 2_000)), 0, None),
+    ];
+    let accel = Accel::build(&shapes);
+    let bounds = accel.primitive_bounds(&shapes);
+    let tiny = [0.0f32, -0.0, 1e-9, -1e-9, 1e-30, -1e-30];
+    let (mut rays, mut hits, mut disagreements) = (0, 0, Vec::new());
+    for i in 0..60_000 {
+        let axis = i % 3;
+        let sign = if (i / 3) % 2 == 0 { 1.0f32 } else { -1.0 };
+        let mut d = Vec3::ZERO;
+        for k in 0..3 {
+            d[k] = if k == axis {
+                sign
+            } else {
+                tiny[rng.random_range(0..tiny.len())]
+            };
+        }
+        if i % 7 == 0 {
+            d = -Vec3::AXES[axis] * sign; // components of −0.0, as `-Vec3::Z` has
+        }
+        // Origins on the integer planes (where the quads' box faces are) half the time.
+        let mut o = Vec3::new(
+            rng.random_range(-12.0..12.0),
+            rng.random_range(-12.0..12.0),
+            rng.random_range(-12.0..12.0),
+        );
+        if i % 2 == 0 {
+            o = o.round();
+        }
+        o[axis] = -15.0 * d[axis]; // 15 units before the geometry, travelling into it
+        let ray = Ray::new(o, d, f32::INFINITY);
+        let bvh = accel.intersect(&shapes, &ray);
+        let brute = accel.intersect_brute_force(&shapes, &bounds, &ray);
+        rays += 1;
+        hits += brute.is_some() as u32;
+        let same = match (bvh, brute) {
+            (None, None) => true,
+            (Some(a), Some(b)) => a.t == b.t,
+            _ => false,
+        };
+        if !same || accel.occluded(&shapes, &ray) != brute.is_some() {
+            disagreements.push(format!(
+                "o {o} d {d:?}: bvh {:?} brute {:?}",
+                bvh.map(|h| h.t),
+                brute.map(|h| h.t)
+            ));
+        }
+    }
+    assert!(
+        disagreements.is_empty(),
+        "{} of {rays} rays disagree, first: {:?}",
+        disagreements.len(),
+        &disagreements[..disagreements.len().min(5)]
+    );
+    assert!(hits > 10_000, "only {hits} of {rays} rays hit");
+}
+
 /// Scenes of one to twelve primitives, below and above the size at which queries skip the
 /// BVH and test every primitive (`Accel::FLAT_MAX`): spheres, disks and triangles mixed,
 /// rays from inside and outside, some with a finite t_max; closest hit and occlusion must

@@ -25,24 +25,35 @@ pub const STACK_SIZE: usize = 64;
 #[derive(Clone, Copy)]
 pub struct NodeRay {
     origin: Vec3A,
+    /// 1 / d, exactly: ±∞ for a zero component, with the zero's sign.
     inv_dir: Vec3A,
-    /// Which of the quantized planes is the near one, per axis (direction negative).
+    /// Which of the quantized planes is the near one, per axis: the sign of `inv_dir` (so of
+    /// −0.0 too).
     neg: [bool; 3],
     /// Ray octant in obvhs' child-order encoding (`ray_get_octant_inv4`).
     oct_inv4: u32,
 }
 
 impl NodeRay {
+    /// A direction component of zero gives infinite slab distances on its axis, and NaN where
+    /// 0 · ∞ or ∞ − ∞ occurs (the origin on a plane of the box, or any plane with the slack);
+    /// the node test keeps its interval where a distance is NaN, so such an axis then does not
+    /// cull (conservative). obvhs' `Ray` clamps reciprocals to ±1/ε instead (about 8·10⁶),
+    /// which shrinks a nearly parallel ray's slab interval towards t = 0 and can lose the hit
+    /// of a ray travelling far along a box's face; and it took −0.0 as positive while its
+    /// reciprocal was negative, which swapped near and far: a ray built as `-Vec3::Z` missed
+    /// every node.
     #[inline(always)]
-    pub fn new(o: Vec3, d: Vec3, t_max: f32) -> Self {
-        let ray = obvhs::ray::Ray::new(Vec3A::from(o), Vec3A::from(d), 0.0, t_max);
-        let oct_inv4 = (if d.x < 0.0 { 0 } else { 0x0404_0404 })
-            | (if d.y < 0.0 { 0 } else { 0x0202_0202 })
-            | (if d.z < 0.0 { 0 } else { 0x0101_0101 });
+    pub fn new(o: Vec3, d: Vec3) -> Self {
+        let inv_dir = Vec3A::ONE / Vec3A::from(d);
+        let neg = [inv_dir.x < 0.0, inv_dir.y < 0.0, inv_dir.z < 0.0];
+        let oct_inv4 = (if neg[0] { 0 } else { 0x0404_0404 })
+            | (if neg[1] { 0 } else { 0x0202_0202 })
+            | (if neg[2] { 0 } else { 0x0101_0101 });
         Self {
-            origin: ray.origin,
-            inv_dir: ray.inv_direction,
-            neg: [d.x < 0.0, d.y < 0.0, d.z < 0.0],
+            origin: Vec3A::from(o),
+            inv_dir,
+            neg,
             oct_inv4,
         }
     }
@@ -112,11 +123,11 @@ pub mod portable {
             for (axis, (lo, hi)) in planes.iter().enumerate() {
                 let (lo, hi) = (lo[c] as f32, hi[c] as f32);
                 let (near, far) = if ray.neg[axis] { (hi, lo) } else { (lo, hi) };
-                // max/min as `vmaxps`/`vminps` take them: the second operand on NaN.
+                // As the AVX2 test's `vmaxps`/`vminps`: a NaN distance keeps the interval.
                 let n = near.mul_add(scale[axis], offset[axis] - slack[axis]);
                 let f = far.mul_add(scale[axis], offset[axis] + slack[axis]);
-                t_near = if t_near > n { t_near } else { n };
-                t_far = if t_far < f { t_far } else { f };
+                t_near = if n > t_near { n } else { t_near };
+                t_far = if f < t_far { f } else { t_far };
             }
             if t_near <= t_far {
                 let bits = (child_bits8 >> (8 * c)) as u32 & 0xff;
@@ -171,8 +182,10 @@ mod avx2 {
             let s = _mm256_set1_ps(scale[axis]);
             let o_near = _mm256_set1_ps(offset[axis] - slack[axis]);
             let o_far = _mm256_set1_ps(offset[axis] + slack[axis]);
-            t_near = _mm256_max_ps(t_near, _mm256_fmadd_ps(near, s, o_near));
-            t_far = _mm256_min_ps(t_far, _mm256_fmadd_ps(far, s, o_far));
+            // `vmaxps`/`vminps` return the second operand when either is NaN: a NaN distance
+            // (see `NodeRay::new`) leaves the interval as it was.
+            t_near = _mm256_max_ps(_mm256_fmadd_ps(near, s, o_near), t_near);
+            t_far = _mm256_min_ps(_mm256_fmadd_ps(far, s, o_far), t_far);
         }
         let hit = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LE_OQ>(t_near, t_far));
 
@@ -542,7 +555,7 @@ mod tests {
                     }
                     let d = d.normalize();
                     let t_max = if k % 5 == 0 { extent } else { f32::INFINITY };
-                    let ray = NodeRay::new(o, d, t_max);
+                    let ray = NodeRay::new(o, d);
                     let got = portable::intersect_node(node, &ray, t_max);
                     assert_eq!(got, intersect_node(node, &ray, t_max), "node {node:?}");
                     compared += 1;
