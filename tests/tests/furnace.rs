@@ -10,10 +10,9 @@
 
 use glam::Vec3;
 use radia_bsdf::{Bsdf, Diffuse};
-use radia_render::{render, RenderOptions};
 use radia_sampling::SamplerKind;
 use radia_scene::*;
-use std::sync::atomic::AtomicBool;
+use radia_tests::render_with;
 
 fn furnace_scene(albedo: f32, max_depth: i32, filter: FilterDesc) -> Scene {
     let eye = Vec3::new(0.0, 0.0, -1.6);
@@ -60,16 +59,7 @@ fn mean_of(scene: &Scene, spp: u32) -> (f64, u64) {
 }
 
 fn mean_with(scene: &Scene, spp: u32, sampler: SamplerKind) -> (f64, u64) {
-    let out = render(
-        scene,
-        &RenderOptions {
-            spp,
-            seed: 3,
-            sampler,
-        },
-        &AtomicBool::new(false),
-        &|_| {},
-    );
+    let out = render_with(scene, spp, sampler);
     (out.image.mean(), out.stats.invalid_samples)
 }
 

@@ -9,12 +9,13 @@
 //! a block now and then as jobs pass through them, independently of what the jobs do (one
 //! extra allocation was seen in 156 pairs of renders); [`POOL_SLACK`] allows for that.
 
-use radia_render::{render, RenderOptions, PASS_SPP};
+use radia_render::PASS_SPP;
 use radia_sampling::SamplerKind;
 use radia_scene::{load_mitsuba_xml, Scene};
+use radia_tests::render_with;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::Path;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The system allocator, counting every allocation and reallocation (from any thread).
 struct Counting;
@@ -53,16 +54,7 @@ const POOL_SLACK: u64 = 4;
 /// Allocations made while rendering `scene` at `spp` with `sampler`.
 fn allocations(scene: &Scene, spp: u32, sampler: SamplerKind) -> u64 {
     let before = ALLOCATIONS.load(Ordering::Relaxed);
-    let out = render(
-        scene,
-        &RenderOptions {
-            spp,
-            seed: 3,
-            sampler,
-        },
-        &AtomicBool::new(false),
-        &|_| {},
-    );
+    let out = render_with(scene, spp, sampler);
     let after = ALLOCATIONS.load(Ordering::Relaxed);
     assert_eq!(out.stats.invalid_samples, 0);
     drop(out);

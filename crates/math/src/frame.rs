@@ -22,17 +22,24 @@ impl Frame {
     /// [`Frame::from_normal`] when `dpdu` is degenerate or parallel to `n`.
     #[inline]
     pub fn from_normal_tangent(n: Vec3, dpdu: Vec3) -> Self {
+        Self::try_from_normal_tangent(n, dpdu).unwrap_or_else(|| Self::from_normal(n))
+    }
+
+    /// The frame of `from_normal_tangent`, or `None` where `dpdu` is (nearly) parallel to `n`,
+    /// zero or not finite, for callers with a fallback of their own.
+    #[inline]
+    pub fn try_from_normal_tangent(n: Vec3, dpdu: Vec3) -> Option<Self> {
         let s = dpdu - n * n.dot(dpdu);
         let len2 = s.length_squared();
         if !(len2 > 1e-20) || !len2.is_finite() {
-            return Self::from_normal(n);
+            return None;
         }
         let s = s / len2.sqrt();
-        Self {
+        Some(Self {
             s,
             t: n.cross(s),
             n,
-        }
+        })
     }
 
     #[inline]

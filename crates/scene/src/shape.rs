@@ -633,19 +633,11 @@ fn cone_point_error(ref_p: Vec3, reach: Vec3, center: Vec3, radius: f32) -> Vec3
 /// n, not finite): the ∂p/∂u frame is used instead.
 #[inline]
 fn tangent_frame(n: Vec3, t: glam::Vec4) -> Option<Frame> {
-    let xyz = t.truncate();
-    let s = xyz - n * n.dot(xyz);
-    let len2 = s.length_squared();
-    if !len2.is_finite() || len2 <= 1e-20 {
-        return None;
+    let mut frame = Frame::try_from_normal_tangent(n, t.truncate())?;
+    if t.w < 0.0 {
+        frame.t = -frame.t;
     }
-    let s = s / len2.sqrt();
-    let sign = if t.w < 0.0 { -1.0 } else { 1.0 };
-    Some(Frame {
-        s,
-        t: n.cross(s) * sign,
-        n,
-    })
+    Some(frame)
 }
 
 #[inline]

@@ -52,19 +52,9 @@ fn soup(rng: &mut Pcg64, n: usize) -> Mesh {
     let mut positions = Vec::new();
     let mut indices = Vec::new();
     for i in 0..n {
-        let c = Vec3::new(
-            rng.random_range(-3.0..3.0),
-            rng.random_range(-3.0..3.0),
-            rng.random_range(-3.0..3.0),
-        );
+        let c = random_in_cube(rng, 3.0);
         for _ in 0..3 {
-            positions.push(
-                c + Vec3::new(
-                    rng.random_range(-0.1..0.1),
-                    rng.random_range(-0.1..0.1),
-                    rng.random_range(-0.1..0.1),
-                ),
-            );
+            positions.push(c + random_in_cube(rng, 0.1));
         }
         let k = 3 * i as u32;
         indices.push([k, k + 1, k + 2]);
@@ -74,6 +64,15 @@ fn soup(rng: &mut Pcg64, n: usize) -> Mesh {
         indices,
         ..Default::default()
     }
+}
+
+/// A uniformly random point in the cube [−half, half]³.
+fn random_in_cube(rng: &mut Pcg64, half: f32) -> Vec3 {
+    Vec3::new(
+        rng.random_range(-half..half),
+        rng.random_range(-half..half),
+        rng.random_range(-half..half),
+    )
 }
 
 fn random_dir(rng: &mut Pcg64) -> Vec3 {
@@ -113,11 +112,7 @@ fn bvh_agrees_with_brute_force() {
         .map(|i| {
             // Half start inside the closed sphere (every ray must hit it), half outside.
             let o = if i % 2 == 0 {
-                Vec3::new(
-                    rng.random_range(-1.0..1.0),
-                    rng.random_range(-1.0..1.0),
-                    rng.random_range(-1.0..1.0),
-                )
+                random_in_cube(&mut rng, 1.0)
             } else {
                 random_dir(&mut rng) * rng.random_range(4.0..8.0)
             };
@@ -248,11 +243,7 @@ fn axis_aligned_rays_agree_with_brute_force() {
             d = -Vec3::AXES[axis] * sign; // components of −0.0, as `-Vec3::Z` has
         }
         // Origins on the integer planes (where the quads' box faces are) half the time.
-        let mut o = Vec3::new(
-            rng.random_range(-12.0..12.0),
-            rng.random_range(-12.0..12.0),
-            rng.random_range(-12.0..12.0),
-        );
+        let mut o = random_in_cube(&mut rng, 12.0);
         if i % 2 == 0 {
             o = o.round();
         }
@@ -295,11 +286,7 @@ fn small_scenes_agree_with_brute_force() {
         let mut shapes = Vec::new();
         let mut tris = Vec::new();
         for k in 0..n {
-            let c = Vec3::new(
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0),
-                rng.random_range(-1.0..1.0),
-            );
+            let c = random_in_cube(&mut rng, 1.0);
             match k % 3 {
                 0 => shapes.push(Shape::new(
                     Geometry::Sphere {
@@ -352,23 +339,14 @@ fn small_scenes_agree_with_brute_force() {
         let (mut hits, mut disagreements) = (0, 0);
         for i in 0..20_000 {
             let o = if i % 2 == 0 {
-                Vec3::new(
-                    rng.random_range(-1.0..1.0),
-                    rng.random_range(-1.0..1.0),
-                    rng.random_range(-1.0..1.0),
-                )
+                random_in_cube(&mut rng, 1.0)
             } else {
                 random_dir(&mut rng) * 3.0
             };
             let d = if i % 2 == 0 {
                 random_dir(&mut rng)
             } else {
-                (Vec3::new(
-                    rng.random_range(-0.8..0.8),
-                    rng.random_range(-0.8..0.8),
-                    rng.random_range(-0.8..0.8),
-                ) - o)
-                    .normalize()
+                (random_in_cube(&mut rng, 0.8) - o).normalize()
             };
             let t_max = if i % 3 == 0 {
                 rng.random_range(0.5..4.0)

@@ -146,6 +146,22 @@ mod tests {
         (p, vec![Vec3::Z; 4], uv, vec![[0, 1, 2], [0, 2, 3]])
     }
 
+    /// The quad's MikkTSpace tangents per vertex, with its positions, uv and triangles.
+    fn quad_tangents(mirrored: bool) -> (Vec<Vec3>, Vec<Vec2>, Vec<[u32; 3]>, Vec<Vec4>) {
+        let (p, n, uv, mut tris) = quad(mirrored);
+        let corners = mikktspace_corners(&p, Some(&n), &uv, &tris).unwrap();
+        let t = per_vertex(
+            &corners,
+            &mut tris,
+            Vertices {
+                positions: &mut p.clone(),
+                normals: None,
+                uvs: None,
+            },
+        );
+        (p, uv, tris, t)
+    }
+
     /// ∂p/∂u of the quad's triangles (radia's `shape.rs` formula, here on the plane).
     fn dp_du(p: &[Vec3], uv: &[Vec2], t: [u32; 3]) -> Vec3 {
         let [a, b, c] = t.map(|i| p[i as usize]);
@@ -157,17 +173,7 @@ mod tests {
 
     #[test]
     fn plain_quad_tangent_is_dp_du_with_sign_plus_one() {
-        let (p, n, uv, mut tris) = quad(false);
-        let corners = mikktspace_corners(&p, Some(&n), &uv, &tris).unwrap();
-        let t = per_vertex(
-            &corners,
-            &mut tris,
-            Vertices {
-                positions: &mut p.clone(),
-                normals: None,
-                uvs: None,
-            },
-        );
+        let (p, uv, tris, t) = quad_tangents(false);
         assert_eq!(t.len(), 4, "no vertex split on a quad with one chart");
         for tri in &tris {
             let d = dp_du(&p, &uv, *tri).normalize();
@@ -181,17 +187,7 @@ mod tests {
 
     #[test]
     fn mirrored_quad_has_sign_minus_one() {
-        let (p, n, uv, mut tris) = quad(true);
-        let corners = mikktspace_corners(&p, Some(&n), &uv, &tris).unwrap();
-        let t = per_vertex(
-            &corners,
-            &mut tris,
-            Vertices {
-                positions: &mut p.clone(),
-                normals: None,
-                uvs: None,
-            },
-        );
+        let (p, uv, tris, t) = quad_tangents(true);
         for tri in &tris {
             // u grows towards −x: ∂p/∂u = (−1, 0, 0), and the bitangent cross(n, t)·w must
             // then be +y (the direction v grows in), so w = −1.

@@ -208,9 +208,16 @@ impl Envmap {
         let y = v * (h - 1) as f32;
         let j0 = (y.floor().max(0.0) as usize).min(h - 2);
         let fy = (y - j0 as f32).clamp(0.0, 1.0);
-        let t = &self.texels;
-        let top = t[j0 * w + i0] * (1.0 - fx) + t[j0 * w + i1] * fx;
-        let bottom = t[(j0 + 1) * w + i0] * (1.0 - fx) + t[(j0 + 1) * w + i1] * fx;
+        self.lerp_texels(i0, i1, j0, fx, fy)
+    }
+
+    /// Bilinear interpolation between texels (i0, j), (i1, j), (i0, j + 1) and (i1, j + 1)
+    /// at fractions fx across and fy down.
+    #[inline(always)]
+    fn lerp_texels(&self, i0: usize, i1: usize, j: usize, fx: f32, fy: f32) -> Spectrum {
+        let (t, w) = (&self.texels, self.width);
+        let top = t[j * w + i0] * (1.0 - fx) + t[j * w + i1] * fx;
+        let bottom = t[(j + 1) * w + i0] * (1.0 - fx) + t[(j + 1) * w + i1] * fx;
         top * (1.0 - fy) + bottom * fy
     }
 
@@ -347,10 +354,7 @@ impl Envmap {
         let i1 = if i + 1 == w { 0 } else { i + 1 };
         let y = radia_math::trig::atan2(sin_theta, cos_theta) * INV_PI * (self.height - 1) as f32;
         let fy = (y - j as f32).clamp(0.0, 1.0);
-        let t = &self.texels;
-        let top = t[j * w + i] * (1.0 - s) + t[j * w + i1] * s;
-        let bottom = t[(j + 1) * w + i] * (1.0 - s) + t[(j + 1) * w + i1] * s;
-        top * (1.0 - fy) + bottom * fy
+        self.lerp_texels(i, i1, j, s, fy)
     }
 
     /// Solid-angle density of [`Envmap::sample_direction`] returning world direction `d`.
