@@ -35,45 +35,46 @@
 //! single-precision variants keep 23 for the radical inverse, and round the Sobol value to
 //! the nearest float, which can give 1.0).
 
-use super::permute::{dim_seed, permute_pow2, radical_inverse_2_bits, sequence, sobol_2_bits, tea};
+use super::permute::{
+    dim_seed, permute_pow2, radical_inverse_2_bits, sequence, sobol_2_bits, tea, Strata,
+};
 use super::{unit_f32, PixelKey, Sampler, SamplerKind};
 use glam::Vec2;
 
 #[derive(Clone, Debug)]
 pub struct LowDiscrepancySampler {
-    sample_count: u32,
+    /// The n samples, a power of two.
+    samples: Strata,
 }
 
 impl LowDiscrepancySampler {
     /// `sample_count` is rounded up to a power-of-two square (Mitsuba's `set_sample_count`).
     pub fn new(sample_count: u32) -> Self {
         Self {
-            sample_count: SamplerKind::LowDiscrepancy.round_sample_count(sample_count),
+            samples: Strata::new(SamplerKind::LowDiscrepancy.round_sample_count(sample_count)),
         }
     }
 }
 
 impl Sampler for LowDiscrepancySampler {
     fn sample_count(&self) -> u32 {
-        self.sample_count
+        self.samples.n()
     }
 
     #[inline]
     fn get_1d(&self, key: PixelKey, index: u32, dim: u32) -> f32 {
-        let n = self.sample_count;
-        let (seed, i) = sequence(key, index, n);
+        let (seed, i) = sequence(key, index, &self.samples);
         let ps = dim_seed(seed, dim);
-        let i = permute_pow2(i, n, ps);
+        let i = permute_pow2(i, self.samples.n(), ps);
         let scramble = tea(ps, 0x48bc_48eb, 4).0;
         unit_f32(radical_inverse_2_bits(i, scramble))
     }
 
     #[inline]
     fn get_2d(&self, key: PixelKey, index: u32, dim: u32) -> Vec2 {
-        let n = self.sample_count;
-        let (seed, i) = sequence(key, index, n);
+        let (seed, i) = sequence(key, index, &self.samples);
         let ps = dim_seed(seed, dim);
-        let i = permute_pow2(i, n, ps);
+        let i = permute_pow2(i, self.samples.n(), ps);
         let (sx, sy) = tea(ps, 0x98bc_51ab, 4);
         Vec2::new(
             unit_f32(radical_inverse_2_bits(i, sx)),

@@ -26,16 +26,17 @@
 //! 0x45fbe943. The jitter is a hash of (key, index, dim) instead of Mitsuba's PCG32 stream;
 //! with `jitter = false` values sit at the centres of their (sub-)strata.
 
-use super::permute::{dim_seed, in_stratum, jitter_1d, jitter_2d, permute_kensler, sequence};
+use super::permute::{dim_seed, jitter_1d, jitter_2d, sequence, Strata};
 use super::{floor_sqrt, PixelKey, Sampler, SamplerKind};
 use glam::Vec2;
 
 #[derive(Clone, Debug)]
 pub struct MultijitterSampler {
-    sample_count: u32,
+    /// The n = rx · ry samples.
+    samples: Strata,
     /// Grid columns (rx) and rows (ry).
-    rx: u32,
-    ry: u32,
+    rx: Strata,
+    ry: Strata,
     jitter: bool,
 }
 
@@ -47,47 +48,44 @@ impl MultijitterSampler {
         let ry = floor_sqrt(n);
         let rx = n / ry;
         Self {
-            sample_count: n,
-            rx,
-            ry,
+            samples: Strata::new(n),
+            rx: Strata::new(rx),
+            ry: Strata::new(ry),
             jitter,
         }
     }
 
     /// The grid (rx, ry) of 2D requests.
     pub fn resolution(&self) -> (u32, u32) {
-        (self.rx, self.ry)
+        (self.rx.n(), self.ry.n())
     }
 }
 
 impl Sampler for MultijitterSampler {
     fn sample_count(&self) -> u32 {
-        self.sample_count
+        self.samples.n()
     }
 
     #[inline]
     fn get_1d(&self, key: PixelKey, index: u32, dim: u32) -> f32 {
-        let n = self.sample_count;
+        let n = &self.samples;
         let (seed, i) = sequence(key, index, n);
         let ps = dim_seed(seed, dim);
-        let p = permute_kensler(i, n, ps.wrapping_mul(0x45fb_e943));
-        in_stratum(p, n, jitter_1d(self.jitter, key, index, dim))
+        let p = n.permute(i, ps.wrapping_mul(0x45fb_e943));
+        n.place(p, jitter_1d(self.jitter, key, index, dim))
     }
 
     #[inline]
     fn get_2d(&self, key: PixelKey, index: u32, dim: u32) -> Vec2 {
-        let (n, rx, ry) = (self.sample_count, self.rx, self.ry);
+        let (n, rx, ry) = (&self.samples, &self.rx, &self.ry);
         let (seed, i) = sequence(key, index, n);
         let ps = dim_seed(seed, dim);
-        let s = permute_kensler(i, n, ps.wrapping_mul(0x5163_3e2d));
-        let (x, y) = (s % rx, s / rx);
-        let sx = permute_kensler(x, rx, ps.wrapping_mul(0x68bc_21eb));
-        let sy = permute_kensler(y, ry, ps.wrapping_mul(0x02e5_be93));
+        let s = n.permute(i, ps.wrapping_mul(0x5163_3e2d));
+        let (y, x) = rx.div_rem(s);
+        let sx = rx.permute(x, ps.wrapping_mul(0x68bc_21eb));
+        let sy = ry.permute(y, ps.wrapping_mul(0x02e5_be93));
         let (jx, jy) = jitter_2d(self.jitter, key, index, dim);
         // (x + (sy + jx) / ry) / rx is stratum x · ry + sy of n at fraction jx.
-        Vec2::new(
-            in_stratum(x * ry + sy, n, jx),
-            in_stratum(y * rx + sx, n, jy),
-        )
+        Vec2::new(n.place(x * ry.n() + sy, jx), n.place(y * rx.n() + sx, jy))
     }
 }

@@ -47,18 +47,21 @@
 //! The jitter is a hash of (key, index, dim) instead of Mitsuba's PCG32 stream; with
 //! `jitter = false` values sit at their sub-strata's centres.
 
-use super::permute::{in_stratum, jitter_1d, permute_kensler, sequence};
+use super::permute::{jitter_1d, sequence, Strata};
 use super::{floor_sqrt, PixelKey, Sampler, SamplerKind};
 use glam::Vec2;
 
 #[derive(Clone, Debug)]
 pub struct OrthogonalSampler {
-    sample_count: u32,
+    /// The n = p² samples.
+    samples: Strata,
     /// The prime p: strata per dimension of the array.
-    resolution: u32,
+    resolution: Strata,
     strength: u32,
     /// p^strength, the runs of a Bush array.
-    runs: u32,
+    runs: Strata,
+    /// p^(strength − 1), the sub-strata of a Bush array's stratum.
+    sub_strata: Strata,
     jitter: bool,
 }
 
@@ -76,16 +79,17 @@ impl OrthogonalSampler {
             .unwrap_or(2);
         let runs = p.pow(strength);
         Self {
-            sample_count: n,
-            resolution: p,
+            samples: Strata::new(n),
+            resolution: Strata::new(p),
             strength,
-            runs,
+            runs: Strata::new(runs),
+            sub_strata: Strata::new(runs / p),
             jitter,
         }
     }
 
     pub fn resolution(&self) -> u32 {
-        self.resolution
+        self.resolution.n()
     }
 
     #[inline]
@@ -96,54 +100,54 @@ impl OrthogonalSampler {
     /// Strength 2: Bose's construction.
     #[inline]
     fn bose(&self, key: PixelKey, index: u32, j: u32) -> f32 {
-        let (n, p) = (self.sample_count, self.resolution);
+        let (n, p) = (&self.samples, &self.resolution);
         let (seed, i) = sequence(key, index, n);
-        let i = permute_kensler(i, n, seed);
-        let (a0, a1) = (i / p, i % p);
+        let i = n.permute(i, seed);
+        let (a0, a1) = p.div_rem(i);
+        // a0 + (c − 1) a1 mod p: below p + p² < 2³² (p < 2¹⁵ for n ≤ 2³⁰).
         let column = |c: u32| match c {
             0 => a0,
             1 => a1,
-            // a0 + (c − 1) a1 mod p, without overflow for any c.
-            _ => ((a0 as u64 + ((c - 1) % p) as u64 * a1 as u64) % p as u64) as u32,
+            _ => p.rem(a0 + p.rem(c - 1) * a1),
         };
         let k = if j % 2 == 1 { j - 1 } else { j + 1 };
         let ps = seed.wrapping_mul(j.wrapping_add(1));
-        let stratum = permute_kensler(column(j), p, ps.wrapping_mul(0x5163_3e2d));
-        let sub = permute_kensler(column(k), p, ps.wrapping_mul(0x68bc_21eb));
+        let stratum = p.permute(column(j), ps.wrapping_mul(0x5163_3e2d));
+        let sub = p.permute(column(k), ps.wrapping_mul(0x68bc_21eb));
         // (stratum + (sub + jitter) / p) / p: stratum · p + sub of p² at fraction jitter.
-        in_stratum(stratum * p + sub, n, self.jitter(key, index, j))
+        n.place(stratum * p.n() + sub, self.jitter(key, index, j))
     }
 
     /// Strength s > 2: Bush's construction over p^s runs.
     #[inline]
     fn bush(&self, key: PixelKey, index: u32, j: u32) -> f32 {
-        let (runs, p) = (self.runs, self.resolution);
+        let (runs, p, stm) = (&self.runs, &self.resolution, &self.sub_strata);
         let (seed, i) = sequence(key, index, runs);
-        let i = permute_kensler(i, runs, seed);
+        let i = runs.permute(i, seed);
         // φ = Σ d_l j^l mod p by Horner's rule over the base-p digits d_l of i (most
-        // significant first).
-        let x = (j % p) as u64;
+        // significant first); every partial sum stays below p² + p < 2³².
+        let x = p.rem(j);
         let mut digits = [0u32; 32];
         let mut rest = i;
         for d in digits.iter_mut().take(self.strength as usize) {
-            *d = rest % p;
-            rest /= p;
+            let (q, r) = p.div_rem(rest);
+            *d = r;
+            rest = q;
         }
         let phi = digits[..self.strength as usize]
             .iter()
             .rev()
-            .fold(0u64, |acc, &d| (acc * x + d as u64) % p as u64) as u32;
-        let stm = runs / p;
+            .fold(0u32, |acc, &d| p.rem(acc * x + d));
         let ps = seed.wrapping_mul(j.wrapping_add(1));
-        let stratum = permute_kensler(phi, p, ps.wrapping_mul(0x5163_3e2d));
-        let sub = permute_kensler((i / p) % stm, stm, ps.wrapping_mul(0x68bc_21eb));
-        in_stratum(stratum * stm + sub, runs, self.jitter(key, index, j))
+        let stratum = p.permute(phi, ps.wrapping_mul(0x5163_3e2d));
+        let sub = stm.permute(stm.rem(p.div_rem(i).0), ps.wrapping_mul(0x68bc_21eb));
+        runs.place(stratum * stm.n() + sub, self.jitter(key, index, j))
     }
 }
 
 impl Sampler for OrthogonalSampler {
     fn sample_count(&self) -> u32 {
-        self.sample_count
+        self.samples.n()
     }
 
     #[inline]

@@ -6,6 +6,7 @@
 //! Mitsuba 3.9.1.
 
 use super::{hash4, mix64, unit_f32, PixelKey};
+use strength_reduce::StrengthReducedU32;
 
 /// The Tiny Encryption Algorithm as a hash of two words (Zafar et al. 2010), `rounds` rounds.
 #[inline]
@@ -27,42 +28,115 @@ pub(super) fn tea(mut v0: u32, mut v1: u32, rounds: u32) -> (u32, u32) {
     (v0, v1)
 }
 
-/// Element `index` of a pseudorandom permutation of `0..n`, any `n` ≥ 1: Kensler's hash
-/// ("Correlated Multi-Jittered Sampling", Pixar 2013) restricted to the smallest power-of-two
-/// range ⊇ `0..n` by masking, with cycle walking until the value lands below `n`. Every
-/// step is a bijection of the masked bits, so the walk ends. `index` must be below `n`.
-#[inline]
-pub(super) fn permute_kensler(index: u32, n: u32, seed: u32) -> u32 {
-    debug_assert!(index < n);
-    if n <= 1 {
-        return 0;
-    }
-    let w = u32::MAX >> (n - 1).leading_zeros();
-    let mut i = index;
-    loop {
-        i ^= seed;
-        i = i.wrapping_mul(0xe170_893d);
-        i ^= seed >> 16;
-        i ^= (i & w) >> 4;
-        i ^= seed >> 8;
-        i = i.wrapping_mul(0x0929_eb3f);
-        i ^= seed >> 23;
-        i ^= (i & w) >> 1;
-        i = i.wrapping_mul(1 | seed >> 27);
-        i = i.wrapping_mul(0x6935_fa69);
-        i ^= (i & w) >> 11;
-        i = i.wrapping_mul(0x74dc_b303);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0x9e50_1cc3);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0xc860_a3df);
-        i &= w;
-        i ^= i >> 5;
-        if i < n {
-            break;
+/// A range of strata `0..n` (n ≥ 1) with what the stratified samplers compute from `n`
+/// prepared once per render: the mask of Kensler's permutation, a strength-reduced divisor
+/// (a multiplication and a shift in place of each integer division by `n`) and 1/n. A
+/// sample request divides by its sampler's `n`, `rx`, `ry` or `p` several times; as
+/// divisions these cost more than the rest of the request.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Strata {
+    n: u32,
+    /// The smallest all-ones mask covering `0..n`.
+    mask: u32,
+    div: StrengthReducedU32,
+    inv_n: f64,
+}
+
+impl Strata {
+    pub(super) fn new(n: u32) -> Self {
+        assert!(n >= 1, "a range of strata needs at least one");
+        Self {
+            n,
+            mask: u32::MAX >> (n - 1).max(1).leading_zeros(),
+            div: StrengthReducedU32::new(n),
+            inv_n: 1.0 / n as f64,
         }
     }
-    ((i as u64 + seed as u64) % n as u64) as u32
+
+    #[inline(always)]
+    pub(super) fn n(&self) -> u32 {
+        self.n
+    }
+
+    /// (a / n, a mod n).
+    #[inline(always)]
+    pub(super) fn div_rem(&self, a: u32) -> (u32, u32) {
+        StrengthReducedU32::div_rem(a, self.div)
+    }
+
+    #[inline(always)]
+    pub(super) fn rem(&self, a: u32) -> u32 {
+        a % self.div
+    }
+
+    /// Element `index` (< n) of a pseudorandom permutation of `0..n`: Kensler's hash
+    /// ("Correlated Multi-Jittered Sampling", Pixar 2013; Mitsuba's `permute_kensler` in
+    /// `include/mitsuba/core/random.h`) restricted to the smallest power-of-two range ⊇
+    /// `0..n` by masking, with cycle walking until the value lands below `n`. Every step is a
+    /// bijection of the masked bits, so the walk ends.
+    #[inline]
+    pub(super) fn permute(&self, index: u32, seed: u32) -> u32 {
+        debug_assert!(index < self.n);
+        if self.n <= 1 {
+            return 0;
+        }
+        let mut i = index;
+        loop {
+            i = kensler_step(i, self.mask, seed);
+            if i < self.n {
+                break;
+            }
+        }
+        // (i + seed) mod n, with i < n.
+        let r = i + self.rem(seed);
+        if r >= self.n {
+            r - self.n
+        } else {
+            r
+        }
+    }
+
+    /// A value in stratum `s` (< n) at fraction `j` ∈ [0, 1) of it: (s + j) / n rounded
+    /// down to a float, but never outside the stratum, so that s/n ≤ value < (s + 1)/n holds
+    /// exactly (for n < 2²⁴; a float times n is exact in f64 for n < 2²⁹). The value stays
+    /// below 1, which Mitsuba's `(p + j) * inv_sample_count` in single precision does not
+    /// ensure.
+    #[inline(always)]
+    pub(super) fn place(&self, s: u32, j: f32) -> f32 {
+        let mut v = ((s as f64 + j as f64) * self.inv_n) as f32;
+        let n = self.n as f64;
+        if v as f64 * n >= s as f64 + 1.0 {
+            v = f32::from_bits(v.to_bits() - 1);
+        }
+        if (v as f64 * n) < s as f64 {
+            v = f32::from_bits(v.to_bits() + 1);
+        }
+        v
+    }
+}
+
+/// One step of Kensler's walk: a bijection of the bits under the all-ones mask `w`.
+#[inline(always)]
+fn kensler_step(mut i: u32, w: u32, seed: u32) -> u32 {
+    i ^= seed;
+    i = i.wrapping_mul(0xe170_893d);
+    i ^= seed >> 16;
+    i ^= (i & w) >> 4;
+    i ^= seed >> 8;
+    i = i.wrapping_mul(0x0929_eb3f);
+    i ^= seed >> 23;
+    i ^= (i & w) >> 1;
+    i = i.wrapping_mul(1 | seed >> 27);
+    i = i.wrapping_mul(0x6935_fa69);
+    i ^= (i & w) >> 11;
+    i = i.wrapping_mul(0x74dc_b303);
+    i ^= (i & w) >> 2;
+    i = i.wrapping_mul(0x9e50_1cc3);
+    i ^= (i & w) >> 2;
+    i = i.wrapping_mul(0xc860_a3df);
+    i &= w;
+    i ^= i >> 5;
+    i
 }
 
 /// Element `index` of a pseudorandom permutation of `0..n`, `n` a power of two: a shuffling
@@ -85,14 +159,12 @@ pub(super) fn permute_pow2(mut index: u32, n: u32, seed: u32) -> u32 {
 /// block of `n` indices is another set, decorrelated by hashing the run number into the seed
 /// (the renderer never asks for those, but the values stay valid).
 #[inline]
-pub(super) fn sequence(key: PixelKey, index: u32, n: u32) -> (u32, u32) {
-    let run = index / n;
-    let seed = if run == 0 {
-        key.0
-    } else {
-        mix64(((key.0 as u64) << 32) | run as u64) as u32
-    };
-    (seed, index % n)
+pub(super) fn sequence(key: PixelKey, index: u32, strata: &Strata) -> (u32, u32) {
+    if index < strata.n() {
+        return (key.0, index);
+    }
+    let (run, i) = strata.div_rem(index);
+    (mix64(((key.0 as u64) << 32) | run as u64) as u32, i)
 }
 
 /// The permutation seed of dimension `dim` of a sequence. Mitsuba uses
@@ -107,25 +179,6 @@ pub(super) fn sequence(key: PixelKey, index: u32, n: u32) -> (u32, u32) {
 #[inline]
 pub(super) fn dim_seed(seed: u32, dim: u32) -> u32 {
     mix64(((seed as u64) << 32) | dim as u64) as u32
-}
-
-/// A value in stratum `s` of `0..n` (width 1/n) at fraction `j` ∈ [0, 1) of it:
-/// (s + j) / n rounded down to a float, but never below the stratum's lower edge, so that
-/// s/n ≤ value < (s + 1)/n holds exactly (for n < 2²⁴). The value stays below 1, which
-/// Mitsuba's `(p + j) * inv_sample_count` in single precision does not ensure.
-#[inline]
-pub(super) fn in_stratum(s: u32, n: u32, j: f32) -> f32 {
-    let x = (s as f64 + j as f64) / n as f64;
-    let lo = s as f64 / n as f64;
-    let mut v = x as f32;
-    if v as f64 > x {
-        v = f32::from_bits(v.to_bits() - 1);
-    }
-    let mut l = lo as f32;
-    if (l as f64) < lo {
-        l = f32::from_bits(l.to_bits() + 1);
-    }
-    v.max(l)
 }
 
 /// The 32 bits of the van der Corput radical inverse (base 2) of `i`, XOR-scrambled.
@@ -159,7 +212,7 @@ mod tests {
             for seed in [0u32, 1, 2, 0xdead_beef, u32::MAX] {
                 let mut seen = vec![false; n as usize];
                 for i in 0..n {
-                    let p = permute_kensler(i, n, seed) as usize;
+                    let p = Strata::new(n).permute(i, seed) as usize;
                     assert!(!seen[p], "kensler n {n} seed {seed}: {p} twice");
                     seen[p] = true;
                 }
@@ -174,23 +227,99 @@ mod tests {
             }
         }
         // Different seeds give different permutations.
-        let a: Vec<u32> = (0..64).map(|i| permute_kensler(i, 64, 10)).collect();
-        let b: Vec<u32> = (0..64).map(|i| permute_kensler(i, 64, 11)).collect();
+        let a: Vec<u32> = (0..64).map(|i| Strata::new(64).permute(i, 10)).collect();
+        let b: Vec<u32> = (0..64).map(|i| Strata::new(64).permute(i, 11)).collect();
         assert_ne!(a, b);
         let a: Vec<u32> = (0..64).map(|i| permute_pow2(i, 64, 10)).collect();
         let b: Vec<u32> = (0..64).map(|i| permute_pow2(i, 64, 11)).collect();
         assert_ne!(a, b);
     }
 
+    /// The strength-reduced arithmetic is the plain one: division, remainder and Kensler's
+    /// final (i + seed) mod n as Mitsuba writes it.
+    #[test]
+    fn strata_arithmetic_is_exact() {
+        let mut h = 1u64;
+        let mut next = || {
+            h = mix64(h);
+            h as u32
+        };
+        for n in [
+            1u32,
+            2,
+            3,
+            7,
+            16,
+            17,
+            255,
+            256,
+            289,
+            1000,
+            65537,
+            1 << 30,
+            u32::MAX,
+        ] {
+            let strata = Strata::new(n);
+            for a in [0, 1, n - 1, n, n.wrapping_add(1), u32::MAX] {
+                assert_eq!(strata.div_rem(a), (a / n, a % n), "{a} / {n}");
+            }
+            for _ in 0..1000 {
+                let a = next();
+                assert_eq!(strata.div_rem(a), (a / n, a % n), "{a} / {n}");
+            }
+        }
+        for n in [2u32, 3, 5, 17, 100, 256, 289, 4099] {
+            let strata = Strata::new(n);
+            for _ in 0..200 {
+                let seed = next();
+                for i in [0, 1, n / 2, n - 1] {
+                    assert_eq!(strata.permute(i, seed), kensler_reference(i, n, seed));
+                }
+            }
+        }
+    }
+
+    /// Mitsuba's `permute_kensler` (`include/mitsuba/core/random.h`) as written there, with
+    /// plain 64-bit arithmetic for the final step.
+    fn kensler_reference(index: u32, n: u32, seed: u32) -> u32 {
+        let w = u32::MAX >> (n - 1).leading_zeros();
+        let mut i = index;
+        loop {
+            i = kensler_step(i, w, seed);
+            if i < n {
+                return ((i as u64 + seed as u64) % n as u64) as u32;
+            }
+        }
+    }
+
     #[test]
     fn in_stratum_stays_inside() {
-        for n in [1u32, 3, 7, 9, 10, 49, 100, 121, 1000, 4096, 65535] {
+        for n in [
+            1u32,
+            3,
+            7,
+            9,
+            10,
+            49,
+            100,
+            121,
+            1000,
+            4096,
+            65535,
+            (1 << 24) - 3,
+        ] {
             for s in [0, n / 3, n / 2, n - 1] {
-                for j in [0.0f32, 0.5, 1.0 - f32::EPSILON / 2.0, 1.0 - 1e-7] {
-                    let v = in_stratum(s, n, j);
+                let random = (0..64u64).map(|k| unit_f32(mix64(k ^ (n as u64) << 20) as u32));
+                let edges = [0.0f32, 0.5, 1.0 - f32::EPSILON / 2.0, 1.0 - 1e-7];
+                for j in edges.into_iter().chain(random) {
+                    let v = Strata::new(n).place(s, j);
                     let c = (v as f64 * n as f64).floor();
                     assert_eq!(c, s as f64, "n {n} s {s} j {j}: {v}");
                     assert!(v < 1.0);
+                    // Within one float spacing of (s + j) / n.
+                    let exact = (s as f64 + j as f64) / n as f64;
+                    let ulp = f32::EPSILON as f64 * exact.max(f32::MIN_POSITIVE as f64);
+                    assert!((v as f64 - exact).abs() <= ulp, "n {n} s {s} j {j}: {v}");
                 }
             }
         }

@@ -23,14 +23,16 @@
 //! The stratification is 1D or 2D per request only: the 1D projections of a 2D request
 //! clump (r samples per 1/r column), which `multijitter` avoids.
 
-use super::permute::{dim_seed, in_stratum, jitter_1d, jitter_2d, permute_kensler, sequence};
+use super::permute::{dim_seed, jitter_1d, jitter_2d, sequence, Strata};
 use super::{floor_sqrt, PixelKey, Sampler, SamplerKind};
 use glam::Vec2;
 
 #[derive(Clone, Debug)]
 pub struct StratifiedSampler {
-    sample_count: u32,
-    resolution: u32,
+    /// The n samples: strata of 1D requests.
+    samples: Strata,
+    /// √n: strata per axis of 2D requests.
+    resolution: Strata,
     jitter: bool,
 }
 
@@ -40,8 +42,8 @@ impl StratifiedSampler {
         let n = SamplerKind::Stratified { jitter }.round_sample_count(sample_count);
         let r = floor_sqrt(n);
         Self {
-            sample_count: n,
-            resolution: r,
+            samples: Strata::new(n),
+            resolution: Strata::new(r),
             jitter,
         }
     }
@@ -49,23 +51,24 @@ impl StratifiedSampler {
 
 impl Sampler for StratifiedSampler {
     fn sample_count(&self) -> u32 {
-        self.sample_count
+        self.samples.n()
     }
 
     #[inline]
     fn get_1d(&self, key: PixelKey, index: u32, dim: u32) -> f32 {
-        let n = self.sample_count;
-        let (seed, i) = sequence(key, index, n);
-        let p = permute_kensler(i, n, dim_seed(seed, dim));
-        in_stratum(p, n, jitter_1d(self.jitter, key, index, dim))
+        let (seed, i) = sequence(key, index, &self.samples);
+        let p = self.samples.permute(i, dim_seed(seed, dim));
+        self.samples
+            .place(p, jitter_1d(self.jitter, key, index, dim))
     }
 
     #[inline]
     fn get_2d(&self, key: PixelKey, index: u32, dim: u32) -> Vec2 {
-        let (n, r) = (self.sample_count, self.resolution);
-        let (seed, i) = sequence(key, index, n);
-        let p = permute_kensler(i, n, dim_seed(seed, dim));
+        let (seed, i) = sequence(key, index, &self.samples);
+        let p = self.samples.permute(i, dim_seed(seed, dim));
         let (jx, jy) = jitter_2d(self.jitter, key, index, dim);
-        Vec2::new(in_stratum(p % r, r, jx), in_stratum(p / r, r, jy))
+        let r = &self.resolution;
+        let (y, x) = r.div_rem(p);
+        Vec2::new(r.place(x, jx), r.place(y, jy))
     }
 }
