@@ -239,6 +239,32 @@ impl Bsdf {
         dispatch!(self, m => m.flags())
     }
 
+    /// Whether [`Bsdf::sample`] reads its `u1`, the choice among lobes or blended
+    /// components. The path integrator draws that value only for models that do: under the
+    /// stratified samplers each value costs a permutation, and a diffuse or metal surface
+    /// has nothing to choose. `testing::check_consistency` checks that a model that says
+    /// `false` samples the same whatever `u1`.
+    #[inline(always)]
+    pub fn samples_lobe(&self) -> bool {
+        match self {
+            Bsdf::Diffuse(_) | Bsdf::Conductor(_) | Bsdf::RoughConductor(_) => false,
+            Bsdf::TwoSided(_) | Bsdf::NormalMap(_) | Bsdf::BumpMap(_) => self.nested_samples_lobe(),
+            _ => true,
+        }
+    }
+
+    /// [`Bsdf::samples_lobe`] of an adapter: its nested models' (kept out of line, as the
+    /// recursion would stop `samples_lobe` from inlining).
+    #[inline(never)]
+    fn nested_samples_lobe(&self) -> bool {
+        match self {
+            Bsdf::TwoSided(m) => m.sides.iter().any(Bsdf::samples_lobe),
+            Bsdf::NormalMap(m) => m.nested.samples_lobe(),
+            Bsdf::BumpMap(m) => m.nested.samples_lobe(),
+            _ => self.samples_lobe(),
+        }
+    }
+
     /// f(wi, wo) · |cos θ_wo| (see the crate docs for the convention).
     #[inline]
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {

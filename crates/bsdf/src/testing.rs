@@ -253,14 +253,24 @@ fn finite_spectrum(s: Spectrum) -> bool {
 /// recompute the half vector from the rounded `wo`); delta samples have eval = pdf = 0
 /// unless the model has smooth lobes too. Ill-conditioned configurations (a Fresnel term at
 /// its critical angle) may exceed `rel`: at most 0.2% of the samples, and none by more than
-/// 10%. A systematic error shows in most samples.
+/// 10%. A systematic error shows in most samples. A model that does not sample a lobe
+/// ([`Bsdf::samples_lobe`]) returns the same sample for u1 and 1 − u1.
 #[track_caller]
 pub fn check_consistency(what: &str, b: &Bsdf, wi: Vec3, n: usize, rel: f32) {
     let flags = b.flags();
     let mut outliers = 0usize;
     let mut checked = 0usize;
     for_each_sample(n, 0xc0ffee ^ n as u64, |u, u1| {
-        let Some(s) = b.sample(&SP, wi, u1, u) else {
+        let sampled = b.sample(&SP, wi, u1, u);
+        if !b.samples_lobe() {
+            let other = b.sample(&SP, wi, 1.0 - u1, u);
+            assert_eq!(
+                sampled.map(|s| (s.wo, s.weight, s.pdf, s.lobe)),
+                other.map(|s| (s.wo, s.weight, s.pdf, s.lobe)),
+                "{what}: samples_lobe() is false but u1 changes the sample (wi {wi}, u {u})"
+            );
+        }
+        let Some(s) = sampled else {
             return;
         };
         let ctx = || format!("{what}: wi {wi}, u ({u}, {u1}), sample {s:?}");

@@ -146,7 +146,12 @@ impl PathIntegrator {
             let block = layout::bounce(depth);
             sampler.seek(block + layout::BSDF_DIRECTION);
             let u2 = sampler.next_2d();
-            let u1 = sampler.next_1d();
+            // A value nothing reads is not drawn (the layout fixes every other one).
+            let u1 = if bsdf.samples_lobe() {
+                sampler.next_1d()
+            } else {
+                0.5
+            };
             let Some(bs) = bsdf.sample(&sp, si.wi, u1, u2) else {
                 break;
             };
@@ -217,7 +222,11 @@ impl PathIntegrator {
         stats: &mut PathStats,
     ) -> Spectrum {
         let u = sampler.next_2d();
-        let u_sel = sampler.next_1d();
+        let u_sel = if scene.lights.choice_uses_sample() {
+            sampler.next_1d()
+        } else {
+            0.5
+        };
         let ctx = LightContext {
             p: si.p,
             n: si.frame.n,

@@ -192,6 +192,12 @@ impl Lights {
         matches!(self.selector, Selector::Empty)
     }
 
+    /// Whether [`Lights::sample`] reads its `u`: not with one light primitive or none.
+    #[inline]
+    pub fn choice_uses_sample(&self) -> bool {
+        !matches!(self.selector, Selector::Empty | Selector::Single)
+    }
+
     pub fn prim(&self, index: usize) -> LightPrim {
         self.prims[index]
     }
