@@ -29,25 +29,42 @@ use sobol_burley::parts;
 #[derive(Clone, Debug)]
 pub struct SobolSampler {
     sample_count: u32,
-    /// [`pair_directions`].
-    pairs: &'static [[u32; 8]],
+    /// [`pair_nibbles`].
+    nibbles: &'static [[u32; 8]],
 }
 
-/// The crate's direction numbers regrouped for two consecutive dimension sets at once: entry
-/// `16 set + b` holds, for the eight dimensions `4 set .. 4 set + 8`, the number that bit b
-/// of the reversed sample index (counted from the top) XORs in. Each is read back from the
-/// crate as `sobol_rev(1 << (31 − b), dim)`, the Sobol point of an index with that one bit.
-fn pair_directions() -> &'static [[u32; 8]] {
+/// The crate's direction numbers regrouped for two consecutive dimension sets at once, four
+/// index bits per lookup: entry `64 set + 16 k + v` holds, for the eight dimensions
+/// `4 set .. 4 set + 8`, the XOR of the numbers that the bits of nibble value `v` at nibble
+/// `k` of the reversed sample index (counted from the top) select. So the Sobol point of a
+/// 16-bit index is four lookups XORed together, in place of one XOR per set bit. The number
+/// of bit b is read back from the crate as `sobol_rev(1 << (31 − b), dim)`, the Sobol point
+/// of an index with that one bit.
+fn pair_nibbles() -> &'static [[u32; 8]] {
     static TABLE: std::sync::OnceLock<Vec<[u32; 8]>> = std::sync::OnceLock::new();
     TABLE.get_or_init(|| {
         let sets = sobol_burley::NUM_DIMENSION_SETS_4D;
-        (0..sets - 1)
-            .flat_map(|set| {
-                (0..16u32).map(move |b| {
-                    std::array::from_fn(|l| parts::sobol_rev(1 << (31 - b), 4 * set + l as u32))
-                })
-            })
-            .collect()
+        let direction = |set: u32, b: u32| -> [u32; 8] {
+            std::array::from_fn(|l| parts::sobol_rev(1 << (31 - b), 4 * set + l as u32))
+        };
+        let mut table = Vec::with_capacity(64 * (sets as usize - 1));
+        for set in 0..sets - 1 {
+            for k in 0..4u32 {
+                for v in 0..16u32 {
+                    let mut entry = [0u32; 8];
+                    for j in 0..4 {
+                        if v & (8 >> j) != 0 {
+                            let d = direction(set, 4 * k + j);
+                            for l in 0..8 {
+                                entry[l] ^= d[l];
+                            }
+                        }
+                    }
+                    table.push(entry);
+                }
+            }
+        }
+        table
     })
 }
 
@@ -55,24 +72,22 @@ impl SobolSampler {
     pub fn new(sample_count: u32) -> Self {
         Self {
             sample_count,
-            pairs: pair_directions(),
+            nibbles: pair_nibbles(),
         }
     }
 
     /// Dimension sets `set` and `set + 1` (< 64) of the sample at `shuffled_rev_index` under
-    /// `seed`: [`SobolSampler::set`] for both, with one walk over the index's bits for the
-    /// two; bit for bit the same values.
+    /// `seed`: [`SobolSampler::set`] for both, with one pass of table lookups over the index's
+    /// bits for the two; bit for bit the same values.
     #[inline(always)]
     fn set_pair(&self, shuffled_rev_index: u32, set: u32, seed: u32) -> [f32; 8] {
-        let dirs = &self.pairs[16 * set as usize..][..16];
+        let table = &self.nibbles[64 * set as usize..][..64];
         let mut sobol = [0u32; 8];
-        let mut bits = shuffled_rev_index & 0xffff_0000;
-        while bits != 0 {
-            let b = bits.leading_zeros();
-            bits &= !(0x8000_0000 >> b);
-            let v = &dirs[b as usize];
+        for k in 0..4 {
+            let v = (shuffled_rev_index >> (28 - 4 * k)) & 0xf;
+            let entry = &table[16 * k + v as usize];
             for l in 0..8 {
-                sobol[l] ^= v[l];
+                sobol[l] ^= entry[l];
             }
         }
         // The rest as `set` does it, four lanes (one set) at a time with the crate's own
