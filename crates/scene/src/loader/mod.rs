@@ -13,6 +13,7 @@
 
 mod bsdfs;
 mod build;
+mod displacement;
 mod emitters;
 mod error;
 pub mod fuzzing;

@@ -3,6 +3,7 @@
 
 use super::bsdfs::{build_bsdf, default_bsdf};
 use super::build::Builder;
+use super::displacement::{self, MeshModifier};
 use super::emitters::area_emitter;
 use super::mesh::{self, MeshStats, RawMesh};
 use super::props::Props;
@@ -48,6 +49,11 @@ pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<ShapeDesc, 
     let to_world = p.transform("to_world")?;
     let flip_normals = p.boolean("flip_normals", false)?;
     let plugin = p.node.plugin.as_str();
+    // radia's subdivision and displacement (`displacement.rs`), on every mesh shape.
+    let modifier = match plugin {
+        "obj" | "ply" | "rectangle" | "cube" => displacement::read_modifier(b, &mut p)?,
+        _ => None,
+    };
     let geometry = match plugin {
         "obj" | "ply" => {
             let face_normals = p.boolean("face_normals", false)?;
@@ -81,16 +87,20 @@ pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<ShapeDesc, 
                 return Err(LoadError::in_file(&path, format!("the file has no faces {here}")));
             }
             let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into());
+            let raw = modified(&p, raw, modifier.as_ref(), &name)?;
             mesh_geometry(b, &p, raw, &to_world, face_normals, flip_normals, &name)?
         }
         "rectangle" => {
-            // Flat: no vertex normals whatever face_normals says.
-            let _ = p.boolean("face_normals", false)?;
-            mesh_geometry(b, &p, mesh::rectangle(), &to_world, true, flip_normals, "rectangle")?
+            // Flat: no vertex normals whatever face_normals says, unless displaced.
+            let face_normals = p.boolean("face_normals", false)?;
+            let flat = face_normals || modifier.as_ref().is_none_or(|m| m.displacement.is_none());
+            let raw = modified(&p, mesh::rectangle(), modifier.as_ref(), "rectangle")?;
+            mesh_geometry(b, &p, raw, &to_world, flat, flip_normals, "rectangle")?
         }
         "cube" => {
             let face_normals = p.boolean("face_normals", false)?;
-            mesh_geometry(b, &p, mesh::cube(), &to_world, face_normals, flip_normals, "cube")?
+            let raw = modified(&p, mesh::cube(), modifier.as_ref(), "cube")?;
+            mesh_geometry(b, &p, raw, &to_world, face_normals, flip_normals, "cube")?
         }
         "sphere" => {
             let center = p.point("center", DVec3::ZERO)?;
@@ -145,6 +155,14 @@ pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<ShapeDesc, 
         emission,
         origin,
     })
+}
+
+/// `raw` subdivided and displaced as the shape asks (unchanged without a modifier).
+fn modified(p: &Props<'_>, raw: RawMesh, modifier: Option<&MeshModifier>, name: &str) -> Result<RawMesh, LoadError> {
+    match modifier {
+        None => Ok(raw),
+        Some(m) => displacement::apply(raw, m).map_err(|e| p.err(format!("\"{name}\": {e}"))),
+    }
 }
 
 /// World-space mesh geometry; repairs are reported as warnings.
