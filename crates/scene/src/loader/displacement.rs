@@ -90,7 +90,7 @@ pub(crate) fn read_modifier(
     let shift = p.float("displacement_shift", 0.0)?;
     for (name, x, pos) in [("displacement_scale", scale, scale_pos), ("displacement_shift", shift, shift_pos)] {
         if !(x as f32).is_finite() {
-            return Err(p.err_at(pos, format!("parameter \"{name}\": {x} is not a finite number")));
+            return Err(p.err_at(pos, format!("parameter \"{name}\": {x:e} is not a finite number")));
         }
     }
     let displacement = if is_texture(p, "displacement") || p.has_any("displacement") {
