@@ -24,7 +24,8 @@
 //!    angle-weighted vertex normal, interpolated and renormalised at midpoints) by
 //!    `displacement_scale × h(uv) + displacement_shift`, where h is the texture's scalar
 //!    value at the vertex's uv: the value of a grey texture, else the luminance (Rec. 709, as
-//!    Mitsuba's `eval_1` of a bitmap) of its colour. A constant (`<float name="displacement"
+//!    Mitsuba's `eval_1` of a bitmap) of its colour (`flip_normals` does not change the
+//!    direction: it only flips the finished surface). A constant (`<float name="displacement"
 //!    value="0.05"/>`) inflates the mesh and needs no uvs; a texture on a mesh without uvs
 //!    is an error.
 //! 3. **Normals** are then recomputed as for a mesh file without normals (Mitsuba's
