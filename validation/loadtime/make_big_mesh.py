@@ -10,7 +10,12 @@ Binary little endian, the layout most exporters write (and the PLY loader's fast
 
 The file (about 121 MB) is not committed; big-mesh.xml renders it. Pure Python, ~10 s.
 
-Run: python3 validation/loadtime/make_big_mesh.py [N]
+Run: python3 validation/loadtime/make_big_mesh.py [--positions-only] [N [OUT.ply]]
+
+--positions-only writes x y z alone (flat shading, no uvs): 12 bytes a vertex instead of 32.
+
+N = 2238 gives the 10,008,338-triangle scale test of issue #11 (about 190 MB): write it outside
+the repository, copy big-mesh.xml next to it as the scene, and see validation/README.md.
 """
 
 import math
@@ -23,7 +28,10 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def main():
-    n = int(sys.argv[1]) if len(sys.argv) > 1 else 1416
+    args = sys.argv[1:]
+    positions_only = "--positions-only" in args
+    args = [a for a in args if a != "--positions-only"]
+    n = int(args[0]) if args else 1416
     amp = 0.05
     verts = array("f")
     for j in range(n):
@@ -35,7 +43,10 @@ def main():
             dx = amp * 6 * math.cos(6 * x) * math.cos(5 * z) + 0.5 * amp * 17 * math.cos(17 * x + 11 * z)
             dz = -amp * 5 * math.sin(6 * x) * math.sin(5 * z) + 0.5 * amp * 11 * math.cos(17 * x + 11 * z)
             inv = 1.0 / math.sqrt(dx * dx + 1.0 + dz * dz)
-            verts.extend((x, y, z, -dx * inv, inv, -dz * inv, i / (n - 1), j / (n - 1)))
+            if positions_only:
+                verts.extend((x, y, z))
+            else:
+                verts.extend((x, y, z, -dx * inv, inv, -dz * inv, i / (n - 1), j / (n - 1)))
     if sys.byteorder != "little":
         verts.byteswap()
 
@@ -58,12 +69,16 @@ def main():
         "comment radia load-time benchmark, validation/loadtime/make_big_mesh.py\n"
         f"element vertex {n * n}\n"
         "property float x\nproperty float y\nproperty float z\n"
-        "property float nx\nproperty float ny\nproperty float nz\n"
-        "property float u\nproperty float v\n"
-        f"element face {nf}\n"
+        + (
+            ""
+            if positions_only
+            else "property float nx\nproperty float ny\nproperty float nz\n"
+            "property float u\nproperty float v\n"
+        )
+        + f"element face {nf}\n"
         "property list uchar int vertex_indices\nend_header\n"
     )
-    path = os.path.join(HERE, "big_mesh.ply")
+    path = args[1] if len(args) > 1 else os.path.join(HERE, "big_mesh.ply")
     with open(path, "wb") as f:
         f.write(header.encode("ascii"))
         f.write(verts.tobytes())

@@ -54,7 +54,7 @@ fn main() {
         let t = Instant::now();
         let a = Accel::build(&scene.shapes);
         accel_t.push(t.elapsed().as_secs_f64());
-        assert_eq!(a.primitives.len(), scene.primitive_count());
+        assert_eq!(a.len(), scene.primitive_count());
     }
     println!("{} ({} runs, medians):", path.display(), runs);
     let (d, b) = (median(desc_t), median(build_t));

@@ -1,6 +1,7 @@
 //! Ray queries: the BVH over every primitive of the scene (obvhs' compressed wide BVH8) with
 //! watertight triangle intersection and analytic spheres and disks.
 
+mod chunked;
 mod wide;
 
 use crate::shape::{Shape, ShapeKind};
@@ -70,24 +71,64 @@ const MAX_BUILD_COORDINATE: f32 = 1e13;
 /// obvhs' own fixed traversal stack. radia's traversal sizes its stack to the tree instead
 /// ([`Accel::with_stack`]), so a deep tree (found by fuzzing: a 61 KB GLB with coordinates
 /// over many orders of magnitude) is valid here and must not abort debug builds and tests.
-pub(crate) fn build_cwbvh(bounds: &[Bounded]) -> CwBvh {
+///
+/// The bounds are taken by value and freed as soon as the binary BVH is built (reinsertion and
+/// the conversion work on its nodes alone), so that they do not add to the conversion's peak.
+pub(crate) fn build_cwbvh(bounds: Vec<Bounded>) -> CwBvh {
     let config = BvhBuildParams::medium_build();
     let mut bvh2 = PlocBuilder::with_capacity(bounds.len()).build(
         config.ploc_search_distance,
-        bounds,
+        &bounds,
         (0..bounds.len() as u32).collect::<Vec<_>>(),
         config.sort_precision,
         config.search_depth_threshold,
     );
+    drop(bounds);
     ReinsertionOptimizer::default().run(&mut bvh2, config.reinsertion_batch_ratio, None);
     bvh2_to_cwbvh(&bvh2, config.max_prims_per_leaf.clamp(1, 3), true, false)
+}
+
+/// Bounds of a triangle.
+fn triangle_bounds(p: [Vec3; 3]) -> Aabb {
+    Aabb::new(p[0].min(p[1]).min(p[2]).into(), p[0].max(p[1]).max(p[2]).into())
+}
+
+/// Bounds of a sphere or disk.
+fn analytic_bounds(shape: &Shape) -> Aabb {
+    match &shape.kind {
+        ShapeKind::Sphere { center, radius, .. } => {
+            let r = Vec3::splat(*radius);
+            Aabb::new((*center - r).into(), (*center + r).into())
+        }
+        ShapeKind::Disk { to_world, .. } => {
+            let mut aabb = Aabb::INVALID;
+            for c in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
+                let p = to_world.transform_point3(Vec3::new(c.0, c.1, 0.0));
+                aabb = aabb.union(&Aabb::from_point(p.into()));
+            }
+            aabb
+        }
+        ShapeKind::Mesh(_) => Aabb::INVALID,
+    }
+}
+
+/// Bounds of primitive `i` in scene order (`first` as in [`Accel`]).
+fn scene_primitive_bounds(shapes: &[Shape], first: &[u32], i: u32) -> Bounded {
+    let si = first.partition_point(|&f| f <= i) - 1;
+    Bounded(match &shapes[si].kind {
+        ShapeKind::Mesh(mesh) => {
+            let face = (i - first[si]) as usize;
+            triangle_bounds(mesh.indices[face].map(|v| mesh.positions[v as usize]))
+        }
+        _ => analytic_bounds(&shapes[si]),
+    })
 }
 
 /// The closest hit found by [`Accel::intersect`].
 #[derive(Clone, Copy, Debug)]
 pub struct Hit {
     pub t: f32,
-    /// Index into [`Accel::primitives`].
+    /// Index of the primitive in BVH order ([`Accel::primitive`]).
     pub prim: u32,
     /// Triangle: barycentrics (b1, b2) of vertices 1 and 2. Analytic shapes: unused.
     pub bary: Vec2,
@@ -232,11 +273,18 @@ fn intersect_disk(ray: &Ray, shape: &Shape, t_max: f32) -> Option<f32> {
 }
 
 /// The scene's acceleration structure.
+///
+/// Per primitive it holds 36 bytes of triangle coordinates (`lanes`, the hot-path layout)
+/// and a 4-byte index (`bvh.primitive_indices`): which shape and face a primitive is comes
+/// from that index and `first`, and [`Accel::primitive`] assembles the rest on demand, so no
+/// second copy of the vertices is kept (issue #11's scale item: 48 bytes per triangle fewer).
 pub struct Accel {
     bvh: CwBvh,
-    /// Primitives reordered to BVH leaf order so a leaf's primitives are contiguous.
-    pub primitives: Vec<Primitive>,
-    /// The triangles among them, as structure of arrays for the 8-wide test.
+    /// `first[s]`: the number of shape s's first primitive in scene order (a mesh's triangles
+    /// in face order), with the total at the end. `bvh.primitive_indices` maps BVH leaf order
+    /// to scene order.
+    first: Vec<u32>,
+    /// The triangles in BVH leaf order, as structure of arrays for the 8-wide test.
     lanes: wide::TriangleLanes,
     /// Bit i set when primitive i is analytic (tested one at a time); `None` when there are
     /// none.
@@ -250,110 +298,126 @@ pub struct Accel {
 
 impl Accel {
     pub fn build(shapes: &[Shape]) -> Self {
+        Self::build_with_chunks(shapes, chunked::CHUNKED_ABOVE)
+    }
+
+    /// [`Accel::build`], but with scenes of more than `chunked_above` primitives built in
+    /// eight parts ([`chunked`]); public so that tests can exercise that path on small scenes.
+    #[doc(hidden)]
+    pub fn build_with_chunks(shapes: &[Shape], chunked_above: usize) -> Self {
         // Primitives are numbered shape by shape (a mesh's triangles in face order); `first[s]`
-        // is the number of shape s's first one. Bounds are made in parallel, and the
-        // primitives only once the BVH has fixed their order.
+        // is the number of shape s's first one.
         let mut first = Vec::with_capacity(shapes.len() + 1);
         let mut total = 0usize;
         for shape in shapes {
-            first.push(total);
+            first.push(total as u32);
             total += match &shape.kind {
                 ShapeKind::Mesh(mesh) => mesh.indices.len(),
                 _ => 1,
             };
         }
-        first.push(total);
+        assert!(
+            total < u32::MAX as usize,
+            "{total} primitives: at most 2^32 - 2 are supported"
+        );
+        first.push(total as u32);
         if total == 0 {
             return Self {
                 bvh: CwBvh::default(),
-                primitives: Vec::new(),
+                first,
                 lanes: wide::TriangleLanes::new(std::iter::empty()),
                 analytic: None,
                 depth: 0,
                 flat: false,
             };
         }
-        let mut bounds = Vec::with_capacity(total);
-        for shape in shapes {
-            match &shape.kind {
-                ShapeKind::Mesh(mesh) => bounds.par_extend(mesh.indices.par_iter().map(|idx| {
-                    let p = idx.map(|i| mesh.positions[i as usize]);
-                    let mn = p[0].min(p[1]).min(p[2]);
-                    let mx = p[0].max(p[1]).max(p[2]);
-                    Bounded(Aabb::new(mn.into(), mx.into()))
-                })),
-                ShapeKind::Sphere { center, radius, .. } => {
-                    let r = Vec3::splat(*radius);
-                    bounds.push(Bounded(Aabb::new(
-                        (*center - r).into(),
-                        (*center + r).into(),
-                    )));
-                }
-                ShapeKind::Disk { to_world, .. } => {
-                    let mut aabb = Aabb::INVALID;
-                    for c in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
-                        let p = to_world.transform_point3(Vec3::new(c.0, c.1, 0.0));
-                        aabb = aabb.union(&Aabb::from_point(p.into()));
+        let bvh = if total > chunked_above {
+            chunked::build(total, |i| scene_primitive_bounds(shapes, &first, i))
+        } else {
+            // Bounds are made in parallel, shape by shape.
+            let mut bounds = Vec::with_capacity(total);
+            for shape in shapes {
+                match &shape.kind {
+                    ShapeKind::Mesh(mesh) => {
+                        bounds.par_extend(mesh.indices.par_iter().map(|idx| {
+                            Bounded(triangle_bounds(idx.map(|i| mesh.positions[i as usize])))
+                        }))
                     }
-                    bounds.push(Bounded(aabb));
+                    _ => bounds.push(Bounded(analytic_bounds(shape))),
                 }
             }
-        }
-        let bvh = build_cwbvh(&bounds);
+            build_cwbvh(bounds)
+        };
         // Real scenes stay far below STACK_SIZE levels; pathological geometry (found by
         // fuzzing: coordinates spread over many orders of magnitude) can go deeper, and is
         // then traversed with a stack on the heap (`with_stack`).
         let depth = wide::max_depth(&bvh);
-        drop(bounds);
-        let primitive = |i: usize| {
+        let locate = |i: u32| {
             let si = first.partition_point(|&f| f <= i) - 1;
-            let shape = si as u32;
+            (si, i - first[si])
+        };
+        let lanes = wide::TriangleLanes::new(bvh.primitive_indices.iter().map(|&i| {
+            let (si, face) = locate(i);
             match &shapes[si].kind {
                 ShapeKind::Mesh(mesh) => {
-                    let face = i - first[si];
-                    Primitive::Triangle {
-                        p: mesh.indices[face].map(|v| mesh.positions[v as usize]),
-                        shape,
-                        face: face as u32,
-                    }
+                    Some(mesh.indices[face as usize].map(|v| mesh.positions[v as usize]))
                 }
-                ShapeKind::Sphere { center, radius, .. } => Primitive::Sphere {
-                    center: *center,
-                    radius: *radius,
-                    shape,
-                },
-                ShapeKind::Disk { .. } => Primitive::Disk { shape },
+                _ => None,
             }
-        };
-        let primitives: Vec<Primitive> = bvh
-            .primitive_indices
-            .par_iter()
-            .map(|&i| primitive(i as usize))
-            .collect();
-        let lanes = wide::TriangleLanes::new(primitives.iter().map(|prim| match prim {
-            Primitive::Triangle { p, .. } => Some(*p),
-            _ => None,
         }));
-        let analytic = primitives
+        let is_analytic = |i: u32| !matches!(shapes[locate(i).0].kind, ShapeKind::Mesh(_));
+        let analytic = shapes
             .iter()
-            .any(|prim| !matches!(prim, Primitive::Triangle { .. }))
+            .any(|s| !matches!(s.kind, ShapeKind::Mesh(_)))
             .then(|| {
-                let mut bits = vec![0u64; primitives.len() / 64 + 2];
-                for (i, prim) in primitives.iter().enumerate() {
-                    if !matches!(prim, Primitive::Triangle { .. }) {
+                let mut bits = vec![0u64; total / 64 + 2];
+                for (i, &prim) in bvh.primitive_indices.iter().enumerate() {
+                    if is_analytic(prim) {
                         bits[i / 64] |= 1 << (i % 64);
                     }
                 }
                 bits
             });
-        let flat = primitives.len() <= Self::FLAT_MAX;
+        let flat = total <= Self::FLAT_MAX;
         Self {
             bvh,
-            primitives,
+            first,
             lanes,
             analytic,
             depth,
             flat,
+        }
+    }
+
+    /// Number of primitives (triangles and analytic shapes).
+    pub fn len(&self) -> usize {
+        self.bvh.primitive_indices.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Primitive `prim` (BVH order, as in [`Hit::prim`]): its shape and face from the index
+    /// map, a triangle's vertices from the 8-wide layout, a sphere's centre and radius from
+    /// its shape.
+    #[inline]
+    pub fn primitive(&self, shapes: &[Shape], prim: usize) -> Primitive {
+        let i = self.bvh.primitive_indices[prim];
+        let si = self.first.partition_point(|&f| f <= i) - 1;
+        let shape = si as u32;
+        match &shapes[si].kind {
+            ShapeKind::Mesh(_) => Primitive::Triangle {
+                p: self.lanes.triangle(prim),
+                shape,
+                face: i - self.first[si],
+            },
+            ShapeKind::Sphere { center, radius, .. } => Primitive::Sphere {
+                center: *center,
+                radius: *radius,
+                shape,
+            },
+            ShapeKind::Disk { .. } => Primitive::Disk { shape },
         }
     }
 
@@ -375,7 +439,7 @@ impl Accel {
         any_hit: bool,
         bary: &mut Vec2,
     ) -> Option<(u32, f32)> {
-        let all = (1u32 << self.primitives.len()) - 1;
+        let all = (1u32 << self.len()) - 1;
         let wray = WatertightRay::new(ray);
         self.intersect_leaves(shapes, &wray, ray, 0, all, ray.t_max, any_hit, bary)
     }
@@ -475,15 +539,20 @@ impl Accel {
         prim: usize,
         t_max: f32,
     ) -> Option<(f32, Vec2)> {
-        match &self.primitives[prim] {
-            Primitive::Triangle { p, .. } => wray
-                .intersect(p, t_max)
-                .map(|(t, b1, b2)| (t, Vec2::new(b1, b2))),
+        let triangle = |p: &[Vec3; 3]| {
+            wray.intersect(p, t_max)
+                .map(|(t, b1, b2)| (t, Vec2::new(b1, b2)))
+        };
+        if self.analytic_lanes(prim) & 1 == 0 {
+            return triangle(&self.lanes.triangle(prim));
+        }
+        match self.primitive(shapes, prim) {
+            Primitive::Triangle { p, .. } => triangle(&p),
             Primitive::Sphere { center, radius, .. } => {
-                intersect_sphere(ray, *center, *radius, t_max).map(|t| (t, Vec2::ZERO))
+                intersect_sphere(ray, center, radius, t_max).map(|t| (t, Vec2::ZERO))
             }
             Primitive::Disk { shape } => {
-                intersect_disk(ray, &shapes[*shape as usize], t_max).map(|t| (t, Vec2::ZERO))
+                intersect_disk(ray, &shapes[shape as usize], t_max).map(|t| (t, Vec2::ZERO))
             }
         }
     }
@@ -491,7 +560,7 @@ impl Accel {
     /// Closest hit along `ray` in (0, ray.t_max).
     #[inline]
     pub fn intersect(&self, shapes: &[Shape], ray: &Ray) -> Option<Hit> {
-        if self.primitives.is_empty() {
+        if self.is_empty() {
             return None;
         }
         let mut bary = Vec2::ZERO;
@@ -519,7 +588,7 @@ impl Accel {
     /// True when something blocks `ray` in (0, ray.t_max). Stops at the first hit.
     #[inline]
     pub fn occluded(&self, shapes: &[Shape], ray: &Ray) -> bool {
-        if self.primitives.is_empty() {
+        if self.is_empty() {
             return false;
         }
         let mut bary = Vec2::ZERO;
@@ -543,7 +612,7 @@ impl Accel {
         .is_some()
     }
 
-    /// The exact test of one primitive (index into [`Accel::primitives`]) against `ray`.
+    /// The exact test of one primitive (BVH order, [`Accel::primitive`]) against `ray`.
     pub fn intersect_primitive(
         &self,
         shapes: &[Shape],
@@ -553,11 +622,11 @@ impl Accel {
         self.intersect_prim(shapes, &WatertightRay::new(ray), ray, prim, ray.t_max)
     }
 
-    /// Bounding boxes of [`Accel::primitives`] as (min, max), for [`Accel::intersect_brute_force`].
+    /// Bounding boxes of the primitives (BVH order) as (min, max), for
+    /// [`Accel::intersect_brute_force`].
     pub fn primitive_bounds(&self, shapes: &[Shape]) -> Vec<[Vec3; 2]> {
-        self.primitives
-            .iter()
-            .map(|prim| match prim {
+        (0..self.len())
+            .map(|i| match &self.primitive(shapes, i) {
                 Primitive::Triangle { p, .. } => {
                     [p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2])]
                 }

@@ -94,15 +94,15 @@ impl Scene {
     }
 
     pub fn primitive_count(&self) -> usize {
-        self.accel.primitives.len()
+        self.accel.len()
     }
 
     /// The closest surface along `ray`.
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceInteraction> {
         let hit = self.accel.intersect(&self.shapes, ray)?;
-        let prim = &self.accel.primitives[hit.prim as usize];
-        Some(self.shapes[prim.shape() as usize].interaction(&hit, prim, ray.o, ray.d))
+        let prim = self.accel.primitive(&self.shapes, hit.prim as usize);
+        Some(self.shapes[prim.shape() as usize].interaction(&hit, &prim, ray.o, ray.d))
     }
 
     /// True when something blocks `ray` before `ray.t_max`.

@@ -81,6 +81,17 @@ fn random_dir(rng: &mut Pcg64) -> Vec3 {
 
 #[test]
 fn bvh_agrees_with_brute_force() {
+    agrees_with_brute_force(Accel::build);
+}
+
+/// The same with the BVH built in eight parts under one root (the path of scenes above
+/// 2M primitives, issue #11's scale item), forced here at 1000 primitives.
+#[test]
+fn chunked_bvh_agrees_with_brute_force() {
+    agrees_with_brute_force(|shapes| Accel::build_with_chunks(shapes, 1000));
+}
+
+fn agrees_with_brute_force(build: impl Fn(&[Shape]) -> Accel) {
     let mut rng = Pcg64::seed_from_u64(42);
     let bsdf = 0;
     let shapes = vec![
@@ -101,12 +112,8 @@ fn bvh_agrees_with_brute_force() {
         ),
     ];
     let _ = Bsdf::Diffuse(Diffuse::new(Vec3::ONE));
-    let accel = Accel::build(&shapes);
-    assert!(
-        accel.primitives.len() >= 100_000,
-        "{} primitives",
-        accel.primitives.len()
-    );
+    let accel = build(&shapes);
+    assert!(accel.len() >= 100_000, "{} primitives", accel.len());
 
     let rays: Vec<Ray> = (0..100_000)
         .map(|i| {
@@ -334,7 +341,7 @@ fn small_scenes_agree_with_brute_force() {
             ));
         }
         let accel = Accel::build(&shapes);
-        assert_eq!(accel.primitives.len(), n);
+        assert_eq!(accel.len(), n);
         let bounds = accel.primitive_bounds(&shapes);
         let (mut hits, mut disagreements) = (0, 0);
         for i in 0..20_000 {
@@ -397,7 +404,7 @@ fn cwbvh_agrees_with_bvh2_on_a_million_triangles() {
         Shape::new(Geometry::Mesh(soup(&mut rng, 400_000)), 0, None),
     ];
     let accel = Accel::build(&shapes);
-    assert!(accel.primitives.len() >= 1_000_000);
+    assert!(accel.len() >= 1_000_000);
     let bounds = accel.primitive_bounds(&shapes);
     let boxes: Vec<B> = bounds
         .iter()

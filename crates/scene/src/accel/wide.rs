@@ -389,6 +389,13 @@ impl TriangleLanes {
         }
         Self { coords }
     }
+
+    /// The vertices of triangle `i` (NaN for a primitive that is not one).
+    #[inline(always)]
+    pub fn triangle(&self, i: usize) -> [Vec3; 3] {
+        let c = &self.coords;
+        std::array::from_fn(|k| Vec3::new(c[3 * k][i], c[3 * k + 1][i], c[3 * k + 2][i]))
+    }
 }
 
 /// The result of [`intersect_triangles`] for eight primitives `base..base + 8`.
@@ -503,7 +510,7 @@ mod tests {
                 crate::accel::Bounded(obvhs::aabb::Aabb::new((c - h).into(), (c + h).into()))
             })
             .collect();
-        crate::accel::build_cwbvh(&tris).nodes
+        crate::accel::build_cwbvh(tris).nodes
     }
 
     /// The portable node test gives the AVX2 test's masks bit for bit (where AVX2 is there;
