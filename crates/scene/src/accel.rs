@@ -112,7 +112,7 @@ fn analytic_bounds(shape: &Shape) -> Aabb {
     }
 }
 
-/// Bounds of primitive `i` in scene order (`first` as in [`Accel`]).
+/// Bounds of primitive `i` in scene order (`first[s]`: the number of shape s's first one).
 fn scene_primitive_bounds(shapes: &[Shape], first: &[u32], i: u32) -> Bounded {
     let si = first.partition_point(|&f| f <= i) - 1;
     Bounded(match &shapes[si].kind {
@@ -275,15 +275,14 @@ fn intersect_disk(ray: &Ray, shape: &Shape, t_max: f32) -> Option<f32> {
 /// The scene's acceleration structure.
 ///
 /// Per primitive it holds 36 bytes of triangle coordinates (`lanes`, the hot-path layout)
-/// and a 4-byte index (`bvh.primitive_indices`): which shape and face a primitive is comes
-/// from that index and `first`, and [`Accel::primitive`] assembles the rest on demand, so no
-/// second copy of the vertices is kept (issue #11's scale item: 48 bytes per triangle fewer).
+/// and 8 bytes of shape and face (`owners`); [`Accel::primitive`] assembles the rest on
+/// demand, so no second copy of the vertices is kept (issue #11's scale item: 40 bytes per
+/// triangle fewer than the 48-byte [`Primitive`] per triangle it kept before).
 pub struct Accel {
+    /// The BVH8; its `primitive_indices` are freed once `owners` and `lanes` are made.
     bvh: CwBvh,
-    /// `first[s]`: the number of shape s's first primitive in scene order (a mesh's triangles
-    /// in face order), with the total at the end. `bvh.primitive_indices` maps BVH leaf order
-    /// to scene order.
-    first: Vec<u32>,
+    /// Per primitive in BVH leaf order: (shape, face; 0 for an analytic shape).
+    owners: Vec<[u32; 2]>,
     /// The triangles in BVH leaf order, as structure of arrays for the 8-wide test.
     lanes: wide::TriangleLanes,
     /// Bit i set when primitive i is analytic (tested one at a time); `None` when there are
@@ -324,7 +323,7 @@ impl Accel {
         if total == 0 {
             return Self {
                 bvh: CwBvh::default(),
-                first,
+                owners: Vec::new(),
                 lanes: wide::TriangleLanes::new(std::iter::empty()),
                 analytic: None,
                 depth: 0,
@@ -352,27 +351,30 @@ impl Accel {
         // fuzzing: coordinates spread over many orders of magnitude) can go deeper, and is
         // then traversed with a stack on the heap (`with_stack`).
         let depth = wide::max_depth(&bvh);
-        let locate = |i: u32| {
-            let si = first.partition_point(|&f| f <= i) - 1;
-            (si, i - first[si])
-        };
-        let lanes = wide::TriangleLanes::new(bvh.primitive_indices.iter().map(|&i| {
-            let (si, face) = locate(i);
-            match &shapes[si].kind {
+        let mut bvh = bvh;
+        let owners: Vec<[u32; 2]> = std::mem::take(&mut bvh.primitive_indices)
+            .into_par_iter()
+            .map(|i| {
+                let si = first.partition_point(|&f| f <= i) - 1;
+                [si as u32, i - first[si]]
+            })
+            .collect();
+        let lanes = wide::TriangleLanes::new(owners.iter().map(|&[si, face]| {
+            match &shapes[si as usize].kind {
                 ShapeKind::Mesh(mesh) => {
                     Some(mesh.indices[face as usize].map(|v| mesh.positions[v as usize]))
                 }
                 _ => None,
             }
         }));
-        let is_analytic = |i: u32| !matches!(shapes[locate(i).0].kind, ShapeKind::Mesh(_));
+        let is_analytic = |si: u32| !matches!(shapes[si as usize].kind, ShapeKind::Mesh(_));
         let analytic = shapes
             .iter()
             .any(|s| !matches!(s.kind, ShapeKind::Mesh(_)))
             .then(|| {
                 let mut bits = vec![0u64; total / 64 + 2];
-                for (i, &prim) in bvh.primitive_indices.iter().enumerate() {
-                    if is_analytic(prim) {
+                for (i, &[si, _]) in owners.iter().enumerate() {
+                    if is_analytic(si) {
                         bits[i / 64] |= 1 << (i % 64);
                     }
                 }
@@ -381,7 +383,7 @@ impl Accel {
         let flat = total <= Self::FLAT_MAX;
         Self {
             bvh,
-            first,
+            owners,
             lanes,
             analytic,
             depth,
@@ -391,26 +393,23 @@ impl Accel {
 
     /// Number of primitives (triangles and analytic shapes).
     pub fn len(&self) -> usize {
-        self.bvh.primitive_indices.len()
+        self.owners.len()
     }
 
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
-    /// Primitive `prim` (BVH order, as in [`Hit::prim`]): its shape and face from the index
-    /// map, a triangle's vertices from the 8-wide layout, a sphere's centre and radius from
+    /// Primitive `prim` (BVH order, as in [`Hit::prim`]): its shape and face, a triangle's vertices from the 8-wide layout, a sphere's centre and radius from
     /// its shape.
     #[inline]
     pub fn primitive(&self, shapes: &[Shape], prim: usize) -> Primitive {
-        let i = self.bvh.primitive_indices[prim];
-        let si = self.first.partition_point(|&f| f <= i) - 1;
-        let shape = si as u32;
-        match &shapes[si].kind {
+        let [shape, face] = self.owners[prim];
+        match &shapes[shape as usize].kind {
             ShapeKind::Mesh(_) => Primitive::Triangle {
                 p: self.lanes.triangle(prim),
                 shape,
-                face: i - self.first[si],
+                face,
             },
             ShapeKind::Sphere { center, radius, .. } => Primitive::Sphere {
                 center: *center,

@@ -394,7 +394,10 @@ impl TriangleLanes {
     #[inline(always)]
     pub fn triangle(&self, i: usize) -> [Vec3; 3] {
         let c = &self.coords;
-        std::array::from_fn(|k| Vec3::new(c[3 * k][i], c[3 * k + 1][i], c[3 * k + 2][i]))
+        assert!(i < c[0].len());
+        // SAFETY: the nine arrays have the same length (`new`), checked against above.
+        let at = |a: usize| unsafe { *c[a].get_unchecked(i) };
+        std::array::from_fn(|k| Vec3::new(at(3 * k), at(3 * k + 1), at(3 * k + 2)))
     }
 }
 
