@@ -4,7 +4,7 @@
 //!
 //! - What an `Accel` keeps: the 8-wide triangle layout (36 bytes), the index map (4) and the
 //!   BVH8 nodes; before the per-primitive copy of the vertices was dropped it kept 48 bytes
-//!   more (about 110 in all).
+//!   more, and the conversion's reserve of one 80-byte node per primitive (about 170 in all).
 //! - The peak of a build in eight parts, the path of scenes above 2M primitives: a single
 //!   build peaks at about 230 bytes per triangle above the mesh (heaptrack), the parts at a
 //!   fraction of it.

@@ -42,7 +42,6 @@ pub fn build(n: usize, bounds: impl Fn(u32) -> Bounded + Sync) -> CwBvh {
         for p in &mut bvh.primitive_indices {
             *p = run[*p as usize];
         }
-        bvh.nodes.shrink_to_fit();
         parts.push(bvh);
     }
     drop(order);
