@@ -142,6 +142,8 @@ CASES = [
     ("lookat-degenerate.xml", "lookat-degenerate.xml:", scene(SPHERE, sensor_with(extra='        <transform name="to_world"><lookat origin="0, 0, 1" target="0, 0, 1" up="0, 1, 0"/></transform>\n'))),
     ("spot-cutoff-negative.xml", "spot-cutoff-negative.xml:9:9", scene('    <emitter type="spot">\n        <float name="cutoff_angle" value="-10"/>\n    </emitter>\n' + SPHERE)),
     ("envmap-scale-nan.xml", "envmap-scale-nan.xml:", scene('    <emitter type="envmap">\n        <string name="filename" value="../../scenes/textures/sky-sun.exr"/>\n        <float name="scale" value="nan"/>\n    </emitter>\n')),
+    ("displacement-subdivisions-huge.xml", "displacement-subdivisions-huge.xml:8:5", scene('    <shape type="cube">\n        <integer name="subdivisions" value="16"/>\n    </shape>\n')),
+    ("displacement-scale-nan.xml", "displacement-scale-nan.xml:10:9", scene('    <shape type="rectangle">\n        <float name="displacement" value="0.5"/>\n        <float name="displacement_scale" value="nan"/>\n    </shape>\n')),
     # ---- glTF (written by gltf_files()) ----
     ("gltf-truncated.gltf", "gltf-truncated.gltf", '{"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0'),
     ("glb-bad-magic.glb", "glb-bad-magic.glb", None),  # written by data_files()
