@@ -403,8 +403,8 @@ impl Accel {
         self.len() == 0
     }
 
-    /// Primitive `prim` (BVH order, as in [`Hit::prim`]): its shape and face, a triangle's vertices from the 8-wide layout, a sphere's centre and radius from
-    /// its shape.
+    /// Primitive `prim` (BVH order, as in [`Hit::prim`]): its shape and face, a triangle's
+    /// vertices from the 8-wide layout, a sphere's centre and radius from its shape.
     #[inline(always)]
     pub fn primitive(&self, shapes: &[Shape], prim: usize) -> Primitive {
         let [shape, face] = self.owners[prim];
