@@ -13,9 +13,9 @@
 
 use radia_render::Image;
 use radia_sampling::SamplerKind;
-use radia_tests::render_with;
 use radia_scene::loader::load_mitsuba_xml;
 use radia_scene::{Geometry, Mesh, Scene, SceneDescription};
+use radia_tests::render_with;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -23,7 +23,8 @@ const N: usize = 16;
 const SCALE: f32 = 0.3;
 
 fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("radia-displacement-{}-{name}", std::process::id()));
+    let dir =
+        std::env::temp_dir().join(format!("radia-displacement-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
@@ -54,7 +55,11 @@ fn direct_obj(scale: f32) -> String {
             let z = scale * (k as f32 / 255.0) + 0.0;
             let (x, y) = (-1.0 + i as f32 / 8.0, -1.0 + j as f32 / 8.0);
             // `{}` prints the shortest decimal that reads back as the same f32.
-            s += &format!("v {x} {y} {z}\nvt {} {}\n", i as f32 / 16.0, j as f32 / 16.0);
+            s += &format!(
+                "v {x} {y} {z}\nvt {} {}\n",
+                i as f32 / 16.0,
+                j as f32 / 16.0
+            );
         }
     }
     let v = |i: usize, j: usize| j * (N + 1) + i + 1;
@@ -113,7 +118,10 @@ const DIRECT_SHAPE: &str = r#"<shape type="obj">
 
 /// Writes the height image, the direct OBJ and the two scenes; returns their paths.
 fn write_pair(dir: &Path, displaced_scale: f32) -> (PathBuf, PathBuf) {
-    image::GrayImage::from_raw(N as u32, N as u32, texels()).unwrap().save(dir.join("height.png")).unwrap();
+    image::GrayImage::from_raw(N as u32, N as u32, texels())
+        .unwrap()
+        .save(dir.join("height.png"))
+        .unwrap();
     std::fs::write(dir.join("direct.obj"), direct_obj(SCALE)).unwrap();
     let displaced = dir.join("displaced.xml");
     std::fs::write(&displaced, scene_xml(&displaced_shape(displaced_scale))).unwrap();
@@ -153,7 +161,12 @@ fn triangle_set(m: &Mesh) -> Vec<[[u32; 5]; 3]> {
 fn render_image(path: &Path) -> Image {
     let scene = Scene::build(load_mitsuba_xml(path, &[]).unwrap());
     let out = render_with(&scene, 8, SamplerKind::Independent);
-    assert_eq!(out.stats.invalid_samples, 0, "{}: NaN or Inf samples", path.display());
+    assert_eq!(
+        out.stats.invalid_samples,
+        0,
+        "{}: NaN or Inf samples",
+        path.display()
+    );
     out.image
 }
 
@@ -175,18 +188,34 @@ fn a_displaced_plane_is_the_directly_modelled_mesh() {
     let b = load_mitsuba_xml(&direct, &[]).unwrap();
     let (ma, mb) = (mesh(&a), mesh(&b));
     assert_eq!(ma.indices.len(), 2 * N * N);
-    assert_eq!(triangle_set(ma), triangle_set(mb), "not the same triangles, bit for bit");
+    assert_eq!(
+        triangle_set(ma),
+        triangle_set(mb),
+        "not the same triangles, bit for bit"
+    );
     // Both get recomputed (angle-weighted) normals: the same up to the summation order.
-    let (na, nb) = (ma.normals.as_ref().expect("smooth"), mb.normals.as_ref().expect("smooth"));
-    let by_position: HashMap<[u32; 3], glam::Vec3> =
-        mb.positions.iter().zip(nb).map(|(p, n)| (p.to_array().map(f32::to_bits), *n)).collect();
+    let (na, nb) = (
+        ma.normals.as_ref().expect("smooth"),
+        mb.normals.as_ref().expect("smooth"),
+    );
+    let by_position: HashMap<[u32; 3], glam::Vec3> = mb
+        .positions
+        .iter()
+        .zip(nb)
+        .map(|(p, n)| (p.to_array().map(f32::to_bits), *n))
+        .collect();
     for (p, n) in ma.positions.iter().zip(na) {
         let m = by_position[&p.to_array().map(f32::to_bits)];
-        assert!((*n - m).length() < 1e-6, "normal at {p}: {n} displaced, {m} direct");
+        assert!(
+            (*n - m).length() < 1e-6,
+            "normal at {p}: {n} displaced, {m} direct"
+        );
     }
     // The surface is not flat (the test would prove nothing on a plane).
     let zs: Vec<f32> = ma.positions.iter().map(|p| p.z).collect();
-    let (lo, hi) = zs.iter().fold((f32::MAX, f32::MIN), |(l, h), &z| (l.min(z), h.max(z)));
+    let (lo, hi) = zs
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(l, h), &z| (l.min(z), h.max(z)));
     assert!(hi - lo > 0.25, "heights {lo}..{hi}");
     let _ = std::fs::remove_dir_all(dir);
 }
@@ -205,7 +234,10 @@ fn a_displaced_plane_renders_as_the_directly_modelled_mesh() {
     let other = relative_difference(&c, &b);
     eprintln!("relative difference: same surface {same:.3e}, 3% taller {other:.3e}");
     // Measured (seed 3): 9.8e-9 and 1.1e-2.
-    assert!(same < 1e-6, "the displaced plane renders differently: {same:.3e}");
+    assert!(
+        same < 1e-6,
+        "the displaced plane renders differently: {same:.3e}"
+    );
     assert!(other > 1e-3, "the control is not told apart: {other:.3e}");
     let _ = std::fs::remove_dir_all(dir);
 }
@@ -215,7 +247,11 @@ fn a_displaced_plane_renders_as_the_directly_modelled_mesh() {
 fn bad_displacement_parameters_are_refused_naming_file_and_line() {
     let dir = temp_dir("errors");
     write_pair(&dir, SCALE);
-    std::fs::write(dir.join("no-uv.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    std::fs::write(
+        dir.join("no-uv.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
     // (shape, line of the error in the scene, message): the shape starts on line 12.
     let cases = [
         (displaced_shape(SCALE).replace(r#"value="4""#, r#"value="-1""#), 20, "parameter \"subdivisions\": value -1 is out of bounds"),
@@ -243,7 +279,10 @@ fn bad_displacement_parameters_are_refused_naming_file_and_line() {
     for (k, (shape, line, expected)) in cases.iter().enumerate() {
         let path = dir.join(format!("bad-{k}.xml"));
         std::fs::write(&path, scene_xml(shape)).unwrap();
-        let e = load_mitsuba_xml(&path, &[]).err().unwrap_or_else(|| panic!("case {k} loaded")).to_string();
+        let e = load_mitsuba_xml(&path, &[])
+            .err()
+            .unwrap_or_else(|| panic!("case {k} loaded"))
+            .to_string();
         assert!(e.contains(&format!("bad-{k}.xml:{line}:")), "case {k}: {e}");
         assert!(e.contains(expected), "case {k}: {e}");
     }

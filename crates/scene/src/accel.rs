@@ -93,7 +93,10 @@ pub(crate) fn build_cwbvh(bounds: Vec<Bounded>) -> CwBvh {
 
 /// Bounds of a triangle.
 fn triangle_bounds(p: [Vec3; 3]) -> Aabb {
-    Aabb::new(p[0].min(p[1]).min(p[2]).into(), p[0].max(p[1]).max(p[2]).into())
+    Aabb::new(
+        p[0].min(p[1]).min(p[2]).into(),
+        p[0].max(p[1]).max(p[2]).into(),
+    )
 }
 
 /// Bounds of a sphere or disk.
@@ -362,14 +365,15 @@ impl Accel {
                 [si as u32, i - first[si]]
             })
             .collect();
-        let lanes = wide::TriangleLanes::new(owners.iter().map(|&[si, face]| {
-            match &shapes[si as usize].kind {
-                ShapeKind::Mesh(mesh) => {
-                    Some(mesh.indices[face as usize].map(|v| mesh.positions[v as usize]))
-                }
-                _ => None,
-            }
-        }));
+        let lanes =
+            wide::TriangleLanes::new(owners.iter().map(
+                |&[si, face]| match &shapes[si as usize].kind {
+                    ShapeKind::Mesh(mesh) => {
+                        Some(mesh.indices[face as usize].map(|v| mesh.positions[v as usize]))
+                    }
+                    _ => None,
+                },
+            ));
         let is_analytic = |si: u32| !matches!(shapes[si as usize].kind, ShapeKind::Mesh(_));
         let analytic = shapes
             .iter()

@@ -146,8 +146,12 @@ fn root(aabb: &Aabb, children: &[Aabb]) -> CwBvhNode {
     };
     let step = Vec3A::from_array(step);
     for (i, child) in children.iter().enumerate() {
-        let lo = ((child.min - aabb.min) / step).floor().clamp(Vec3A::ZERO, Vec3A::splat(255.0));
-        let hi = ((child.max - aabb.min) / step).ceil().clamp(Vec3A::ZERO, Vec3A::splat(255.0));
+        let lo = ((child.min - aabb.min) / step)
+            .floor()
+            .clamp(Vec3A::ZERO, Vec3A::splat(255.0));
+        let hi = ((child.max - aabb.min) / step)
+            .ceil()
+            .clamp(Vec3A::ZERO, Vec3A::splat(255.0));
         node.child_min_x[i] = lo.x as u8;
         node.child_min_y[i] = lo.y as u8;
         node.child_min_z[i] = lo.z as u8;
@@ -188,9 +192,19 @@ mod tests {
             let child = &bvh.nodes[1 + slot];
             let q = |v: [u8; 8]| v[slot] as f32;
             let lo = Vec3A::from(root.p)
-                + step * Vec3A::new(q(root.child_min_x), q(root.child_min_y), q(root.child_min_z));
+                + step
+                    * Vec3A::new(
+                        q(root.child_min_x),
+                        q(root.child_min_y),
+                        q(root.child_min_z),
+                    );
             let hi = Vec3A::from(root.p)
-                + step * Vec3A::new(q(root.child_max_x), q(root.child_max_y), q(root.child_max_z));
+                + step
+                    * Vec3A::new(
+                        q(root.child_max_x),
+                        q(root.child_max_y),
+                        q(root.child_max_z),
+                    );
             // The child's own frame starts at its box's minimum.
             let p = Vec3A::from(child.p);
             assert!(lo.cmple(p).all() && p.cmple(hi).all(), "slot {slot}");

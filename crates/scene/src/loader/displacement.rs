@@ -72,7 +72,11 @@ impl Displacement {
     /// The offset along the normal at `uv`.
     fn offset(&self, uv: Vec2) -> f32 {
         let c = self.height.eval(&ShadingPoint::at_uv(uv));
-        let h = if c.x == c.y && c.y == c.z { c.x } else { luminance(c) };
+        let h = if c.x == c.y && c.y == c.z {
+            c.x
+        } else {
+            luminance(c)
+        };
         self.scale * h + self.shift
     }
 }
@@ -86,17 +90,33 @@ pub(crate) fn read_modifier(
     let subdivisions = p.int("subdivisions", 0, 0, MAX_LEVELS)? as u32;
     let scale_pos = p.pos_of("displacement_scale");
     let shift_pos = p.pos_of("displacement_shift");
-    let stray = if p.has_any("displacement_scale") { Some(scale_pos) } else if p.has_any("displacement_shift") { Some(shift_pos) } else { None };
+    let stray = if p.has_any("displacement_scale") {
+        Some(scale_pos)
+    } else if p.has_any("displacement_shift") {
+        Some(shift_pos)
+    } else {
+        None
+    };
     let scale = p.float("displacement_scale", 1.0)?;
     let shift = p.float("displacement_shift", 0.0)?;
-    for (name, x, pos) in [("displacement_scale", scale, scale_pos), ("displacement_shift", shift, shift_pos)] {
+    for (name, x, pos) in [
+        ("displacement_scale", scale, scale_pos),
+        ("displacement_shift", shift, shift_pos),
+    ] {
         if !(x as f32).is_finite() {
-            return Err(p.err_at(pos, format!("parameter \"{name}\": {x:e} is not a finite number")));
+            return Err(p.err_at(
+                pos,
+                format!("parameter \"{name}\": {x:e} is not a finite number"),
+            ));
         }
     }
     let displacement = if is_texture(p, "displacement") || p.has_any("displacement") {
         let height = texture_param(b, p, "displacement", 0.0, false)?;
-        Some(Displacement { height, scale: scale as f32, shift: shift as f32 })
+        Some(Displacement {
+            height,
+            scale: scale as f32,
+            shift: shift as f32,
+        })
     } else if let Some(pos) = stray {
         return Err(p.err_at(
             pos,
@@ -108,13 +128,18 @@ pub(crate) fn read_modifier(
     if subdivisions == 0 && displacement.is_none() {
         return Ok(None);
     }
-    Ok(Some(MeshModifier { subdivisions, displacement }))
+    Ok(Some(MeshModifier {
+        subdivisions,
+        displacement,
+    }))
 }
 
 /// Subdivides and displaces `raw` (object space). Errors are messages for the caller to place.
 pub(crate) fn apply(raw: RawMesh, m: &MeshModifier) -> Result<RawMesh, String> {
     let triangles = raw.indices.len() as u64;
-    let after = triangles.checked_mul(1u64 << (2 * m.subdivisions)).filter(|&t| t <= MAX_TRIANGLES);
+    let after = triangles
+        .checked_mul(1u64 << (2 * m.subdivisions))
+        .filter(|&t| t <= MAX_TRIANGLES);
     if after.is_none() {
         return Err(format!(
             "{} subdivision level(s) of {triangles} triangles would make {} triangles, more than the limit of {MAX_TRIANGLES}",
@@ -124,7 +149,10 @@ pub(crate) fn apply(raw: RawMesh, m: &MeshModifier) -> Result<RawMesh, String> {
     }
     if let Some(d) = &m.displacement {
         if raw.uvs.is_none() && !d.height.is_constant() {
-            return Err("a displacement texture needs texture coordinates, and the mesh has none".to_string());
+            return Err(
+                "a displacement texture needs texture coordinates, and the mesh has none"
+                    .to_string(),
+            );
         }
     }
     // Without normals and without a displacement, subdivision leaves the normals to be
@@ -155,7 +183,11 @@ fn fill_normals(mesh: &mut RawMesh) {
     match &mut mesh.normals {
         Some(ns) => {
             for (n, c) in ns.iter_mut().zip(computed) {
-                *n = if *n == Vec3::ZERO { c } else { n.normalize_or(c) };
+                *n = if *n == Vec3::ZERO {
+                    c
+                } else {
+                    n.normalize_or(c)
+                };
             }
         }
         None => mesh.normals = Some(computed),
@@ -172,7 +204,8 @@ pub(crate) fn subdivide(mesh: &RawMesh) -> RawMesh {
         uvs: mesh.uvs.clone(),
         indices: Vec::with_capacity(mesh.indices.len() * 4),
     };
-    let mut midpoints: HashMap<(u32, u32), u32> = HashMap::with_capacity(mesh.indices.len() * 3 / 2 + 1);
+    let mut midpoints: HashMap<(u32, u32), u32> =
+        HashMap::with_capacity(mesh.indices.len() * 3 / 2 + 1);
     let mut midpoint = |out: &mut RawMesh, i: u32, j: u32, face: [u32; 3]| -> u32 {
         let key = (i.min(j), i.max(j));
         if let Some(&k) = midpoints.get(&key) {
@@ -180,14 +213,19 @@ pub(crate) fn subdivide(mesh: &RawMesh) -> RawMesh {
         }
         let k = out.positions.len() as u32;
         let (a, b) = (key.0 as usize, key.1 as usize);
-        out.positions.push((mesh.positions[a] + mesh.positions[b]) * 0.5);
+        out.positions
+            .push((mesh.positions[a] + mesh.positions[b]) * 0.5);
         if let (Some(ns), Some(src)) = (&mut out.normals, &mesh.normals) {
             // Opposite normals (a knife edge) average to zero: take the face's normal.
             let face_normal = || {
                 let [p0, p1, p2] = face.map(|v| mesh.positions[v as usize]);
                 (p1 - p0).cross(p2 - p0).normalize_or(Vec3::X)
             };
-            ns.push((src[a] + src[b]).try_normalize().unwrap_or_else(face_normal));
+            ns.push(
+                (src[a] + src[b])
+                    .try_normalize()
+                    .unwrap_or_else(face_normal),
+            );
         }
         if let (Some(uvs), Some(src)) = (&mut out.uvs, &mesh.uvs) {
             uvs.push((src[a] + src[b]) * 0.5);
@@ -200,7 +238,8 @@ pub(crate) fn subdivide(mesh: &RawMesh) -> RawMesh {
         let ab = midpoint(&mut out, a, b, t);
         let bc = midpoint(&mut out, b, c, t);
         let ca = midpoint(&mut out, c, a, t);
-        out.indices.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+        out.indices
+            .extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
     }
     out
 }
@@ -243,14 +282,19 @@ mod tests {
     }
 
     fn modifier(levels: u32, d: Option<Displacement>) -> MeshModifier {
-        MeshModifier { subdivisions: levels, displacement: d }
+        MeshModifier {
+            subdivisions: levels,
+            displacement: d,
+        }
     }
 
     /// A one-channel image texture from rows of values (row 0 at v = 0).
     fn image(rows: &[&[f32]], filter: FilterType, wrap: WrapMode) -> Texture {
         let (w, h) = (rows[0].len(), rows.len());
         let data = rows.iter().flat_map(|r| r.iter().copied()).collect();
-        Bitmap::new(w, h, 1, data, filter, wrap, UvTransform::IDENTITY).unwrap().into()
+        Bitmap::new(w, h, 1, data, filter, wrap, UvTransform::IDENTITY)
+            .unwrap()
+            .into()
     }
 
     #[test]
@@ -259,9 +303,16 @@ mod tests {
             let m = apply(tetrahedron(), &modifier(levels, None)).unwrap();
             assert_eq!(m.indices.len(), 4 * 4usize.pow(levels));
             // Euler: a closed genus-0 mesh has V = E - F + 2 = F/2 + 2 vertices.
-            assert_eq!(m.positions.len(), m.indices.len() / 2 + 2, "level {levels}: a vertex is duplicated");
+            assert_eq!(
+                m.positions.len(),
+                m.indices.len() / 2 + 2,
+                "level {levels}: a vertex is duplicated"
+            );
             let uses = edge_uses(&m.indices);
-            assert!(uses.values().all(|&u| u == 2), "level {levels}: an edge is not shared by exactly two triangles");
+            assert!(
+                uses.values().all(|&u| u == 2),
+                "level {levels}: an edge is not shared by exactly two triangles"
+            );
             // On the plane: interior edges twice, the 4·2^L boundary edges once.
             let m = apply(plane(), &modifier(levels, None)).unwrap();
             assert_eq!(m.indices.len(), 2 * 4usize.pow(levels));
@@ -289,9 +340,18 @@ mod tests {
     fn plane_vertices_move_by_the_texel_height() {
         // 4×4 texels, nearest: the vertex at grid (i, j) of a 4×4 subdivision (uv = (i, j)/4)
         // reads texel (min(i, 3), min(j, 3)) under clamping.
-        let rows: [&[f32]; 4] = [&[0.0, 0.1, 0.2, 0.3], &[0.4, 0.5, 0.6, 0.7], &[0.8, 0.9, 1.0, 0.25], &[0.5, 0.125, 0.75, 0.0625]];
+        let rows: [&[f32]; 4] = [
+            &[0.0, 0.1, 0.2, 0.3],
+            &[0.4, 0.5, 0.6, 0.7],
+            &[0.8, 0.9, 1.0, 0.25],
+            &[0.5, 0.125, 0.75, 0.0625],
+        ];
         let height = image(&rows, FilterType::Nearest, WrapMode::Clamp);
-        let d = Displacement { height, scale: 0.5, shift: 0.25 };
+        let d = Displacement {
+            height,
+            scale: 0.5,
+            shift: 0.25,
+        };
         let m = apply(plane(), &modifier(2, Some(d))).unwrap();
         assert!(m.normals.is_none(), "normals are left to be recomputed");
         assert_eq!(m.positions.len(), 25);
@@ -306,7 +366,11 @@ mod tests {
     fn a_checkerboard_moves_vertices_to_its_two_heights() {
         // Mitsuba's checkerboard: color0 where (frac(u) > ½) == (frac(v) > ½).
         let checker = radia_bsdf::Checkerboard::new(0.8, 0.2, UvTransform::IDENTITY);
-        let d = Displacement { height: checker.into(), scale: 1.0, shift: 0.0 };
+        let d = Displacement {
+            height: checker.into(),
+            scale: 1.0,
+            shift: 0.0,
+        };
         let m = apply(plane(), &modifier(3, Some(d))).unwrap();
         for (p, uv) in m.positions.iter().zip(m.uvs.as_ref().unwrap()) {
             let f = *uv - uv.floor();
@@ -322,10 +386,15 @@ mod tests {
         let ramp: Vec<f32> = (0..8).map(|k| k as f32 / 7.0).collect();
         let height = image(&[&ramp], FilterType::Bilinear, WrapMode::Clamp);
         let s = 0.7;
-        let d = Displacement { height, scale: s, shift: 0.0 };
+        let d = Displacement {
+            height,
+            scale: s,
+            shift: 0.0,
+        };
         let levels = 4;
         let raw = apply(plane(), &modifier(levels, Some(d))).unwrap();
-        let (mesh, stats) = super::super::mesh::finalize(raw, &glam::DMat4::IDENTITY, false, false).unwrap();
+        let (mesh, stats) =
+            super::super::mesh::finalize(raw, &glam::DMat4::IDENTITY, false, false).unwrap();
         assert_eq!(stats.invalid_normals, 0);
         let slope = 4.0 * s / 7.0;
         let analytic = Vec3::new(-slope, 0.0, 1.0).normalize();
@@ -336,8 +405,14 @@ mod tests {
             let u = (p.x + 1.0) / 2.0;
             // Vertices whose whole one-ring lies on the linear part.
             if u - cell / 2.0 >= 0.5 / 8.0 && u + cell / 2.0 <= 1.0 - 0.5 / 8.0 {
-                assert!((p.z - s * (8.0 * u - 0.5) / 7.0).abs() < 1e-6, "height at {p}");
-                assert!((*n - analytic).length() < 1e-5, "normal {n} at {p}, expected {analytic}");
+                assert!(
+                    (p.z - s * (8.0 * u - 0.5) / 7.0).abs() < 1e-6,
+                    "height at {p}"
+                );
+                assert!(
+                    (*n - analytic).length() < 1e-5,
+                    "normal {n} at {p}, expected {analytic}"
+                );
                 checked += 1;
             }
         }
@@ -348,7 +423,11 @@ mod tests {
     fn a_constant_inflates_a_mesh_without_uvs_along_its_normals() {
         // The tetrahedron's vertex normals point away from the centre: every vertex moves
         // outwards by exactly the offset.
-        let d = Displacement { height: Texture::from(0.5), scale: 0.2, shift: 0.0 };
+        let d = Displacement {
+            height: Texture::from(0.5),
+            scale: 0.2,
+            shift: 0.0,
+        };
         let m = apply(tetrahedron(), &modifier(0, Some(d))).unwrap();
         for p in &m.positions {
             assert!((p.length() - (3f32.sqrt() + 0.1)).abs() < 1e-6, "{p}");
@@ -363,7 +442,11 @@ mod tests {
         let e = apply(plane(), &modifier(16, None)).unwrap_err();
         assert!(e.contains("would make 8589934592 triangles"), "{e}");
         let checker = radia_bsdf::Checkerboard::new(0.8, 0.2, UvTransform::IDENTITY);
-        let d = Displacement { height: checker.into(), scale: 1.0, shift: 0.0 };
+        let d = Displacement {
+            height: checker.into(),
+            scale: 1.0,
+            shift: 0.0,
+        };
         let e = apply(tetrahedron(), &modifier(0, Some(d))).unwrap_err();
         assert!(e.contains("needs texture coordinates"), "{e}");
     }

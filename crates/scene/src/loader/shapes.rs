@@ -158,7 +158,12 @@ pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<ShapeDesc, 
 }
 
 /// `raw` subdivided and displaced as the shape asks (unchanged without a modifier).
-fn modified(p: &Props<'_>, raw: RawMesh, modifier: Option<&MeshModifier>, name: &str) -> Result<RawMesh, LoadError> {
+fn modified(
+    p: &Props<'_>,
+    raw: RawMesh,
+    modifier: Option<&MeshModifier>,
+    name: &str,
+) -> Result<RawMesh, LoadError> {
     match modifier {
         None => Ok(raw),
         Some(m) => displacement::apply(raw, m).map_err(|e| p.err(format!("\"{name}\": {e}"))),
