@@ -549,17 +549,13 @@ impl Accel {
             wray.intersect(p, t_max)
                 .map(|(t, b1, b2)| (t, Vec2::new(b1, b2)))
         };
-        if self.analytic_lanes(prim) & 1 == 0 {
-            return triangle(&self.lanes.triangle(prim));
-        }
-        match self.primitive(shapes, prim) {
-            Primitive::Triangle { p, .. } => triangle(&p),
-            Primitive::Sphere { center, radius, .. } => {
-                intersect_sphere(ray, center, radius, t_max).map(|t| (t, Vec2::ZERO))
+        let shape = &shapes[self.owners[prim][0] as usize];
+        match &shape.kind {
+            ShapeKind::Mesh(_) => triangle(&self.lanes.triangle(prim)),
+            ShapeKind::Sphere { center, radius, .. } => {
+                intersect_sphere(ray, *center, *radius, t_max).map(|t| (t, Vec2::ZERO))
             }
-            Primitive::Disk { shape } => {
-                intersect_disk(ray, &shapes[shape as usize], t_max).map(|t| (t, Vec2::ZERO))
-            }
+            ShapeKind::Disk { .. } => intersect_disk(ray, shape, t_max).map(|t| (t, Vec2::ZERO)),
         }
     }
 
