@@ -72,6 +72,7 @@ fn scene(bsdf: Bsdf, spp: u32) -> Scene {
             emission: None,
             origin: "furnace sphere".into(),
         }],
+        world_origin: glam::DVec3::ZERO,
         emitters: vec![EmitterDesc::Constant {
             radiance: Vec3::ONE,
         }],

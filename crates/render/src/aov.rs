@@ -70,7 +70,12 @@ impl<'a> AovIntegrator<'a> {
                     // Mitsuba's `si.t`: camera rays start on the near plane there as here
                     // (`src/sensors/perspective.cpp`), so this is not the distance to the pinhole.
                     AovKind::Depth => dst[0] = si.t,
-                    AovKind::Position => dst.copy_from_slice(&si.p.to_array()),
+                    // In the file's world coordinates, as Mitsuba's (render space is
+                    // camera-centred, `SceneDescription::world_origin`).
+                    AovKind::Position => {
+                        let p = si.p.as_dvec3() + scene.world_origin;
+                        dst.copy_from_slice(&p.as_vec3().to_array())
+                    }
                     AovKind::Uv => dst.copy_from_slice(&si.uv.to_array()),
                     AovKind::GeoNormal => dst.copy_from_slice(&si.n.to_array()),
                     AovKind::ShNormal => {

@@ -82,6 +82,7 @@ static MILLION: LazyLock<Bench> = LazyLock::new(|| {
         sampler: SamplerDesc::default(),
         shapes,
         emitters: Vec::new(),
+        world_origin: glam::DVec3::ZERO,
     };
     Bench::new("million", Scene::build(desc), 2)
 });

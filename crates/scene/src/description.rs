@@ -1,7 +1,7 @@
 //! The typed scene description: what a loader (Mitsuba XML, glTF) produces and
 //! [`crate::Scene::build`] consumes. Plain data in world space; no strings left to compare.
 
-use glam::{Affine3A, Vec2, Vec3, Vec4};
+use glam::{Affine3A, DVec3, Vec2, Vec3, Vec4};
 use radia_bsdf::{Bsdf, Texture};
 use radia_math::Spectrum;
 use radia_sampling::SamplerKind;
@@ -275,4 +275,8 @@ pub struct SceneDescription {
     pub sampler: SamplerDesc,
     pub shapes: Vec<ShapeDesc>,
     pub emitters: Vec<EmitterDesc>,
+    /// Where render space's origin lies in the file's world coordinates. The loaders place
+    /// the camera at the origin (positions are f32, whose spacing grows with distance from
+    /// it); outputs in world coordinates, such as the `position` AOV, add this back.
+    pub world_origin: DVec3,
 }

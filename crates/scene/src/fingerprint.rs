@@ -53,6 +53,9 @@ impl SceneDescription {
             }
             h.0.update(b"|");
         }
+        // Positions above are camera-relative; two scenes that differ by a translation of
+        // everything differ only here (and in their `position` AOV).
+        let _ = write!(h, "{:?}", self.world_origin);
         h.0.digest()
     }
 }

@@ -45,6 +45,9 @@ pub struct Scene {
     /// Light selection for next-event estimation (radia's default strategy unless
     /// [`Scene::set_light_sampler`] chose another).
     pub lights: Lights,
+    /// Where render space's origin lies in the scene file's world coordinates
+    /// ([`SceneDescription::world_origin`]).
+    pub world_origin: glam::DVec3,
     accel: Accel,
 }
 
@@ -89,6 +92,7 @@ impl Scene {
             emitters,
             environment,
             lights,
+            world_origin: desc.world_origin,
             accel,
         }
     }

@@ -58,6 +58,7 @@ fn scene(shapes: Vec<ShapeDesc>, emitters: Vec<EmitterDesc>, kind: LightSamplerK
         film: FilmDesc::default(),
         sampler: SamplerDesc::default(),
         shapes,
+        world_origin: glam::DVec3::ZERO,
         emitters,
     });
     s.set_light_sampler(kind);

@@ -13,7 +13,7 @@ use crate::{
     parse_aovs, AovDesc, CameraDesc, ClassicDesc, ClassicShading, EmitterDesc, FilmDesc,
     FilterDesc, IntegratorDesc, NprDesc, NprStyle, SamplerDesc, SceneDescription,
 };
-use glam::Affine3A;
+use glam::{Affine3A, DMat4, DVec3};
 use radia_bsdf::{Bsdf, Texture};
 use radia_sampling::SamplerKind;
 use std::collections::HashMap;
@@ -27,6 +27,41 @@ pub(crate) struct Builder<'a> {
     pub texture_cache: HashMap<usize, Texture>,
     /// Non-fatal notes (Mitsuba's warnings), "file:line:col: message".
     pub warnings: Vec<String>,
+    /// Where render space's origin lies in the file's world space: the first sensor's
+    /// position (see [`Builder::to_world`]).
+    pub world_origin: DVec3,
+}
+
+impl Builder<'_> {
+    /// The node's `to_world` in render space: the file's world space moved so that the
+    /// camera sits at the origin, composed in double precision before anything is rounded to
+    /// f32. Float spacing grows with distance from the origin (7.8 mm at 10⁵), and what the
+    /// camera sees is what needs the finest grid; a scene placed far from the file's origin
+    /// then renders exactly as the same scene placed at it. pbrt-v4 renders in the same
+    /// "camera-world" space by default (`src/pbrt/cameras.cpp`, `CameraTransform`). Only
+    /// positions move: directions (environment maps, directional lights) are unaffected.
+    pub fn to_world(&self, p: &mut Props<'_>) -> Result<DMat4, LoadError> {
+        Ok(DMat4::from_translation(-self.world_origin) * p.transform("to_world")?)
+    }
+
+    /// A point given in the file's world space (a point light's `position`), in render space.
+    pub fn world_point(&self, x: DVec3) -> DVec3 {
+        x - self.world_origin
+    }
+}
+
+/// The position of the first sensor, the origin of render space ([`Builder::to_world`]);
+/// the file's origin when the scene has no sensor (an error reported later) or its
+/// transform is not a finite one (reported when the sensor is built).
+fn first_sensor_position(doc: &Doc) -> DVec3 {
+    let root = Props::new(doc, 0);
+    let Some((_, n, _)) = root.objects().into_iter().find(|o| o.2 == Kind::Sensor) else {
+        return DVec3::ZERO;
+    };
+    match Props::new(doc, n).transform("to_world") {
+        Ok(m) if m.is_finite() => m.w_axis.truncate(),
+        _ => DVec3::ZERO,
+    }
 }
 
 const I32: (i64, i64) = (i32::MIN as i64, i32::MAX as i64);
@@ -38,6 +73,7 @@ pub(crate) fn build_scene(doc: &Doc) -> Result<(SceneDescription, Vec<String>), 
         bsdf_cache: HashMap::new(),
         texture_cache: HashMap::new(),
         warnings: Vec::new(),
+        world_origin: first_sensor_position(doc),
     };
     let mut p = Props::new(doc, 0);
 
@@ -119,6 +155,7 @@ pub(crate) fn build_scene(doc: &Doc) -> Result<(SceneDescription, Vec<String>), 
         sampler,
         shapes,
         emitters,
+        world_origin: b.world_origin,
     };
     Ok((desc, b.warnings))
 }
@@ -502,7 +539,7 @@ fn build_sensor(
     let fov_x =
         horizontal_fov(fov, fov_axis, focal_length, aspect).map_err(|e| p.err_at(fov_pos, e))?;
 
-    let to_world = p.transform("to_world")?;
+    let to_world = b.to_world(&mut p)?;
     if transform::has_scale(&to_world) {
         return Err(p.err_at(
             p.pos_of("to_world"),

@@ -22,9 +22,9 @@ pub(crate) fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<EmitterDesc, 
         "point" => {
             let position = if p.has("position") {
                 exclusive(&p, "position", "to_world")?;
-                p.point("position", DVec3::ZERO)?
+                b.world_point(p.point("position", DVec3::ZERO)?)
             } else {
-                p.transform("to_world")?.w_axis.truncate()
+                b.to_world(&mut p)?.w_axis.truncate()
             };
             EmitterDesc::Point {
                 position: position.as_vec3(),
@@ -46,7 +46,7 @@ pub(crate) fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<EmitterDesc, 
                 ));
             }
             EmitterDesc::SmoothSpot {
-                to_world: affine(&p.transform("to_world")?),
+                to_world: affine(&b.to_world(&mut p)?),
                 intensity,
                 inner_cone_angle: inner as f32,
                 outer_cone_angle: outer as f32,
@@ -73,7 +73,7 @@ pub(crate) fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<EmitterDesc, 
                 ));
             }
             EmitterDesc::Spot {
-                to_world: affine(&p.transform("to_world")?),
+                to_world: affine(&b.to_world(&mut p)?),
                 intensity,
                 cutoff_angle: cutoff_angle as f32,
                 beam_width: beam_width as f32,

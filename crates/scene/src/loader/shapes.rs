@@ -46,7 +46,7 @@ pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<ShapeDesc, 
         }
     }
 
-    let to_world = p.transform("to_world")?;
+    let to_world = b.to_world(&mut p)?;
     let flip_normals = p.boolean("flip_normals", false)?;
     let plugin = p.node.plugin.as_str();
     // radia's subdivision and displacement (`displacement.rs`), on every mesh shape.

@@ -331,7 +331,18 @@ fn loader_camera_lookat_and_clips() {
     let m = Mat4::from(s.camera.to_world);
     assert_vec_close(m.z_axis.truncate(), -Vec3::Z, 1e-6, "camera looks along −z");
     assert_vec_close(m.x_axis.truncate(), -Vec3::X, 1e-6, "left = up × dir = −x");
-    assert_vec_close(m.w_axis.truncate(), Vec3::new(0., 1., 5.), 1e-6, "origin");
+    // Render space is centred on the camera (`Builder::to_world`): the file's eye position
+    // is the world origin, and the camera sits at render space's origin.
+    assert_eq!(
+        s.world_origin,
+        glam::DVec3::new(0., 1., 5.),
+        "world origin = eye"
+    );
+    assert_eq!(
+        m.w_axis.truncate(),
+        Vec3::ZERO,
+        "the camera at render space's origin"
+    );
     assert_eq!(s.camera.near_clip, 0.5);
     assert_eq!(
         s.camera.far_clip, 100.0,
@@ -1745,14 +1756,16 @@ fn loader_repo_cornell_box() {
         area += n.length() / 2.0;
     }
     assert_close(area, 0.25, 1e-5, "light area");
-    // Every wall and box is a mesh with normals; all vertices inside the box.
+    // Every wall and box is a mesh with normals; all vertices inside the box (in the file's
+    // coordinates: render space is centred on the camera).
+    let eps = 1e-5;
     for sh in &s.shapes {
         let m = mesh_of(sh);
         assert!(!m.indices.is_empty());
-        assert!(m
-            .positions
-            .iter()
-            .all(|p| p.x.abs() <= 1.0 && p.y >= 0.0 && p.y <= 2.0 && p.z.abs() <= 1.0));
+        assert!(m.positions.iter().all(|p| {
+            let p = p.as_dvec3() + s.world_origin;
+            p.x.abs() <= 1.0 + eps && p.y >= -eps && p.y <= 2.0 + eps && p.z.abs() <= 1.0 + eps
+        }));
     }
     // Walls face into the box: the floor's normals point up.
     let floor = mesh_of(&s.shapes[0]);
@@ -2121,4 +2134,63 @@ fn perturbing_adapters_load() {
     };
     assert_eq!(b.scale, 0.25);
     assert!(matches!(*b.nested, Bsdf::RoughPlastic(_)));
+}
+
+/// Issue #11: the whole scene translated far from the file's origin loads as the same render
+/// space as the original, bit for bit (camera-relative coordinates, `Builder::to_world`):
+/// only `world_origin` differs. Every coordinate below is a multiple of 2⁻⁷, so that the
+/// translated file's values are exact in f64 and the two scenes are the same scene.
+#[test]
+fn translated_scene_loads_as_the_same_render_space() {
+    let scene = |t: f64| {
+        // Every x and z coordinate moves by t.
+        let (x, z) = (|v: f64| v + t, |v: f64| v + t);
+        let body = format!(
+            r#"<sensor type="perspective"><transform name="to_world">
+                <lookat origin="{}, 1.5, {}" target="{}, 0.25, {}" up="0, 1, 0"/></transform></sensor>
+            <shape type="rectangle"><transform name="to_world"><scale x="0.75" y="1.25"/>
+                <rotate x="1" angle="-37"/><translate x="{}" y="0.125" z="{}"/></transform>
+                <emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+            <shape type="sphere"><point name="center" x="{}" y="0.5" z="{}"/><float name="radius" value="0.375"/></shape>
+            <emitter type="point"><point name="position" x="{}" y="2" z="{}"/></emitter>
+            <emitter type="spot"><transform name="to_world"><lookat origin="{}, 2, {}" target="{}, 0, {}"/></transform></emitter>"#,
+            x(0.5),
+            z(4.0),
+            x(-0.25),
+            z(0.0),
+            x(-0.25),
+            z(-0.5),
+            x(0.5),
+            z(-1.25),
+            x(-0.25),
+            z(0.5),
+            x(0.5),
+            z(1.0),
+            x(-0.25),
+            z(0.0),
+        );
+        load_ok("translated", &body)
+    };
+    let (a, b) = (scene(0.0), scene(1e5));
+    assert_eq!(
+        b.world_origin - a.world_origin,
+        glam::DVec3::new(1e5, 0.0, 1e5)
+    );
+    assert_eq!(format!("{:?}", a.camera), format!("{:?}", b.camera));
+    assert_eq!(format!("{:?}", a.emitters), format!("{:?}", b.emitters));
+    assert_eq!(a.shapes.len(), b.shapes.len());
+    for (sa, sb) in a.shapes.iter().zip(&b.shapes) {
+        assert_eq!(format!("{:?}", sa.geometry), format!("{:?}", sb.geometry));
+    }
+    // The rendered bits (everything the fingerprint hashes but the origin) agree.
+    let moved = SceneDescription {
+        world_origin: a.world_origin,
+        ..b.clone()
+    };
+    assert_eq!(a.fingerprint(), moved.fingerprint());
+    assert_ne!(
+        a.fingerprint(),
+        b.fingerprint(),
+        "the origin is part of the scene"
+    );
 }
