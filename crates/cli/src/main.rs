@@ -10,8 +10,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use radia_formats::{load_scene, GltfOptions, SceneFormat, SceneOptions};
 use radia_render::part::{read_part, write_part, Merger, Part, RenderIdentity};
 use radia_render::{
-    image_io::{write_image, write_image_with_aovs},
-    render_part_until, render_until, RenderOptions, SampleRange,
+    image_io::write_image_with_aovs, render_part_until, render_until, RenderOptions, SampleRange,
 };
 use radia_sampling::SamplerKind;
 use radia_scene::{parse_aovs, AovDesc, FilterDesc, LightSamplerKind, Scene};
@@ -190,7 +189,8 @@ fn merge(parts: &[PathBuf], output: &std::path::Path, partial: bool) -> Result<(
     if partial {
         write_part(&merged, output).map_err(|e| e.to_string())?;
     } else {
-        write_image(&merged.develop(), output).map_err(|e| e.to_string())?;
+        let spp = Some(merged.sample_count());
+        write_image_with_aovs(&merged.develop(), None, spp, output).map_err(|e| e.to_string())?;
     }
     println!(
         "radia: merged {} parts, {} of {} spp -> {}",
@@ -429,7 +429,8 @@ fn run_render(command: Command) -> Result<ExitCode, String> {
     }
     match &image {
         Output::Image(image, aovs) => {
-            write_image_with_aovs(image, aovs.as_ref(), &output).map_err(|e| e.to_string())?
+            write_image_with_aovs(image, aovs.as_ref(), Some(stats.spp), &output)
+                .map_err(|e| e.to_string())?
         }
         Output::Part(part) => write_part(part, &output).map_err(|e| e.to_string())?,
     }

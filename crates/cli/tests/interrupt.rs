@@ -1,5 +1,7 @@
 //! Stopping a render early: SIGINT (Ctrl-C) and SIGTERM keep the finished passes, write them
-//! and exit with 130 / 143 saying so; `--time-budget` writes what the time allowed and exits 0.
+//! (the EXR header says how many samples per pixel) and exit with 130 / 143 saying so; a
+//! second signal exits at once without writing; `--time-budget` writes what the time allowed
+//! and exits 0.
 
 use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
@@ -94,7 +96,64 @@ fn interrupted_render_keeps_the_passes(signal: &str, code: i32) {
     );
     assert!(spp >= 16 && spp.is_multiple_of(16), "{spp} spp");
     assert!(out.exists(), "no image written");
+    assert_eq!(
+        radia_render::image_io::read_exr_spp(&out).unwrap(),
+        Some(spp),
+        "the EXR header's sample count"
+    );
     let _ = std::fs::remove_dir_all(out.parent().unwrap());
+}
+
+/// A second Ctrl-C while the first is being honoured (the image being written) exits at once
+/// with 130 and writes nothing. The two signals come a millisecond or two apart from one
+/// shell (far enough apart not to merge into one pending signal); the window
+/// between them and the end of the write is a matter of timing, so a run in which the second
+/// came too late (the image was already written: the first signal's ordinary outcome, checked
+/// as such) is repeated, up to 5 times.
+#[test]
+fn a_second_sigint_exits_at_once_without_writing() {
+    let (scene, out) = setup("twice");
+    for attempt in 0..5 {
+        let _ = std::fs::remove_file(&out);
+        // A larger film, so that writing its image takes a while.
+        let mut child = start(
+            &scene,
+            &out,
+            &["--spp", "10000000", "--resolution", "512x512"],
+        );
+        let mut stderr = wait_until_loaded(&mut child);
+        // The first pass (16 spp, about half a second) must finish, so that the first signal
+        // has something to write.
+        let mut line = String::new();
+        std::thread::sleep(Duration::from_millis(2000));
+        let pid = child.id().to_string();
+        let burst = Command::new("sh")
+            .args(["-c", "kill -INT $0; sleep 0.001; kill -INT $0", &pid])
+            .status()
+            .unwrap();
+        assert!(burst.success());
+        let status = child.wait().unwrap();
+        let mut rest = String::new();
+        while stderr.read_line(&mut line).unwrap() > 0 {
+            rest.push_str(&line);
+            line.clear();
+        }
+        assert_eq!(status.code(), Some(130), "{rest}");
+        if rest.contains("SIGINT again: exiting without writing") {
+            assert!(!out.exists(), "an image was written: {rest}");
+            let partial = out.with_file_name("out.exr.partial");
+            assert!(!partial.exists(), "a partial image was left: {rest}");
+            let _ = std::fs::remove_dir_all(out.parent().unwrap());
+            return;
+        }
+        // Too late: the first signal's outcome, complete.
+        assert!(
+            rest.contains("interrupted by SIGINT: wrote"),
+            "attempt {attempt}: {rest}"
+        );
+        assert!(out.exists());
+    }
+    panic!("the second signal never arrived while the first was being honoured");
 }
 
 #[test]

@@ -335,14 +335,7 @@ pub fn write_part(part: &Part, path: &Path) -> Result<(), PartError> {
         .write()
         .to_buffered(&mut bytes)
         .map_err(|e| err(e.to_string()))?;
-    let mut tmp = path.file_name().unwrap_or_default().to_os_string();
-    tmp.push(".partial");
-    let tmp = path.with_file_name(tmp);
-    std::fs::write(&tmp, bytes.into_inner()).map_err(|e| err(e.to_string()))?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        err(e.to_string())
-    })
+    crate::image_io::write_atomically(path, &bytes.into_inner()).map_err(|e| err(e.to_string()))
 }
 
 /// Reads a partial EXR written by [`write_part`].
