@@ -3,7 +3,9 @@
 //! The sensor below uses every `to_world` operation radia supports on sensors; its rays are
 //! derived by hand from Mitsuba's conventions (`perspective.cpp`, `transform.h`): the camera
 //! looks along local +z, image x runs towards local −x, image y downwards, and the origin
-//! sits on the near plane.
+//! sits on the near plane. Render space is centred on the camera (the loader's
+//! camera-relative coordinates), so ray origins are compared in the file's coordinates:
+//! render-space origin + `world_origin`.
 
 use glam::{Vec2, Vec3};
 use radia_scene::{load_mitsuba_xml, Scene};
@@ -46,12 +48,18 @@ fn lookat_camera_rays_match_hand_computed() {
     let scene = Scene::build(load_mitsuba_xml(&path, &[]).unwrap());
     let cam = &scene.camera;
     let eye = Vec3::new(1.0, 2.0, 3.0);
+    assert_eq!(
+        scene.world_origin.as_vec3(),
+        eye,
+        "render space is centred on the eye"
+    );
+    let file = |o: Vec3| o + scene.world_origin.as_vec3();
 
     // Centre of the film: straight ahead, starting on the near plane.
     let r = cam.generate_ray(Vec2::new(0.5, 0.5));
     assert_close(r.d, Vec3::new(0.0, 0.0, -1.0), "centre direction");
     assert_close(
-        r.o,
+        file(r.o),
         eye + Vec3::new(0.0, 0.0, -0.5),
         "centre origin on the near plane",
     );
@@ -60,7 +68,11 @@ fn lookat_camera_rays_match_hand_computed() {
     let r = cam.generate_ray(Vec2::new(1.0, 0.5));
     assert_close(r.d, Vec3::new(1.0, 0.0, -1.0).normalize(), "right edge");
     // The near plane is at local z = 0.5: t = 0.5 / cos 45°.
-    assert_close(r.o, eye + r.d * (0.5 * 2f32.sqrt()), "right edge origin");
+    assert_close(
+        file(r.o),
+        eye + r.d * (0.5 * 2f32.sqrt()),
+        "right edge origin",
+    );
 
     // Top-left corner: local (+1, +0.5, 1) → world (−1, 0.5, −1)/1.5.
     let r = cam.generate_ray(Vec2::new(0.0, 0.0));
@@ -100,7 +112,7 @@ fn composed_transform_and_fov_axis_y() {
     let r = cam.generate_ray(Vec2::new(0.5, 0.5));
     assert_close(r.d, Vec3::X, "view direction after rotation");
     assert_close(
-        r.o,
+        r.o + scene.world_origin.as_vec3(),
         Vec3::new(0.0, 0.0, 5.0) + Vec3::X * 0.01,
         "origin: translated eye + near clip",
     );
