@@ -27,6 +27,7 @@ fn furnace_scene(albedo: f32, max_depth: i32, filter: FilterDesc) -> Scene {
             fov_x_degrees: 30.0,
             near_clip: 0.01,
             far_clip: 1e4,
+            principal_point_offset: glam::Vec2::ZERO,
         },
         film: FilmDesc {
             width: 64,
@@ -52,6 +53,7 @@ fn furnace_scene(albedo: f32, max_depth: i32, filter: FilterDesc) -> Scene {
         emitters: vec![EmitterDesc::Constant {
             radiance: Vec3::ONE,
         }],
+        sampling_weights: Default::default(),
     })
 }
 

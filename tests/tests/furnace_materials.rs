@@ -51,6 +51,7 @@ fn scene(bsdf: Bsdf, spp: u32) -> Scene {
             fov_x_degrees: 45.0,
             near_clip: 0.01,
             far_clip: 1e4,
+            principal_point_offset: glam::Vec2::ZERO,
         },
         film: FilmDesc {
             width: RES,
@@ -76,6 +77,7 @@ fn scene(bsdf: Bsdf, spp: u32) -> Scene {
         emitters: vec![EmitterDesc::Constant {
             radiance: Vec3::ONE,
         }],
+        sampling_weights: Default::default(),
     })
 }
 

@@ -73,6 +73,7 @@ static MILLION: LazyLock<Bench> = LazyLock::new(|| {
             fov_x_degrees: 45.0,
             near_clip: 0.01,
             far_clip: 1000.0,
+            principal_point_offset: glam::Vec2::ZERO,
         },
         film: FilmDesc {
             width: FILM,
@@ -83,6 +84,7 @@ static MILLION: LazyLock<Bench> = LazyLock::new(|| {
         shapes,
         emitters: Vec::new(),
         world_origin: glam::DVec3::ZERO,
+        sampling_weights: Default::default(),
     };
     Bench::new("million", Scene::build(desc), 2)
 });

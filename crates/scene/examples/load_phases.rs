@@ -45,6 +45,7 @@ fn main() {
         let l = Lights::build(
             LightSamplerKind::default(),
             &scene.emitters,
+            &scene.sampling_weights,
             &scene.shapes,
             lights::scene_sphere(&scene.shapes),
         );

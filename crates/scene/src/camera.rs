@@ -15,6 +15,10 @@ pub struct Camera {
     tan_half_y: f32,
     near_clip: f32,
     far_clip: f32,
+    /// Added to the film position before projecting (Mitsuba's `sample_ray` adds
+    /// `film.size() * principal_point_offset / film.crop_size()` to the position sample;
+    /// radia has no crop window, so the factor is 1).
+    principal_point_offset: Vec2,
 }
 
 impl Camera {
@@ -28,6 +32,7 @@ impl Camera {
             tan_half_y: tan_half_x / aspect,
             near_clip: desc.near_clip,
             far_clip: desc.far_clip,
+            principal_point_offset: desc.principal_point_offset,
         }
     }
 
@@ -36,6 +41,7 @@ impl Camera {
     /// starts on the near plane and ends on the far plane.
     #[inline]
     pub fn generate_ray(&self, film: Vec2) -> Ray {
+        let film = film + self.principal_point_offset;
         let local = Vec3::new(
             (1.0 - 2.0 * film.x) * self.tan_half_x,
             (1.0 - 2.0 * film.y) * self.tan_half_y,

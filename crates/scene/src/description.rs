@@ -135,6 +135,10 @@ pub struct CameraDesc {
     pub fov_x_degrees: f32,
     pub near_clip: f32,
     pub far_clip: f32,
+    /// The principal point's offset from the film centre, in units of the film's width and
+    /// height (`principal_point_offset_x/y`, Mitsuba's `src/sensors/perspective.cpp`): the
+    /// pixel at film position p sees what the centred camera sees at p + offset.
+    pub principal_point_offset: Vec2,
 }
 
 /// The sensor's sampler (`src/samplers/*.cpp`). `sample_count` is as the scene gives it; the
@@ -279,4 +283,28 @@ pub struct SceneDescription {
     /// the camera at the origin (positions are f32, whose spacing grows with distance from
     /// it); outputs in world coordinates, such as the `position` AOV, add this back.
     pub world_origin: DVec3,
+    /// Each emitter's `sampling_weight`.
+    pub sampling_weights: SamplingWeights,
+}
+
+/// Mitsuba's per-emitter `sampling_weight` (`src/render/emitter.cpp`, default 1): how much
+/// next-event estimation favours the emitter relative to the others (see
+/// [`crate::lights`] for how each light-selection strategy applies it). A missing entry
+/// is 1, so `SamplingWeights::default()` leaves every emitter at 1.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SamplingWeights {
+    /// By shape index: the weight of that shape's `area` emitter.
+    pub shapes: Vec<f32>,
+    /// By index into [`SceneDescription::emitters`].
+    pub emitters: Vec<f32>,
+}
+
+impl SamplingWeights {
+    pub fn shape(&self, index: usize) -> f32 {
+        self.shapes.get(index).copied().unwrap_or(1.0)
+    }
+
+    pub fn emitter(&self, index: usize) -> f32 {
+        self.emitters.get(index).copied().unwrap_or(1.0)
+    }
 }

@@ -56,6 +56,10 @@ impl SceneDescription {
         // Positions above are camera-relative; two scenes that differ by a translation of
         // everything differ only here (and in their `position` AOV).
         let _ = write!(h, "{:?}", self.world_origin);
+        // Absent when every weight is 1, so such scenes keep their fingerprints.
+        if self.sampling_weights != Default::default() {
+            let _ = write!(h, "weights {:?}|", self.sampling_weights);
+        }
         h.0.digest()
     }
 }

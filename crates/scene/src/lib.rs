@@ -48,6 +48,8 @@ pub struct Scene {
     /// Where render space's origin lies in the scene file's world coordinates
     /// ([`SceneDescription::world_origin`]).
     pub world_origin: glam::DVec3,
+    /// Each emitter's `sampling_weight`, by emitter index.
+    pub sampling_weights: Vec<f32>,
     accel: Accel,
 }
 
@@ -56,8 +58,10 @@ impl Scene {
         let mut shapes = Vec::with_capacity(desc.shapes.len());
         let mut bsdfs = Vec::with_capacity(desc.shapes.len());
         let mut emitters = Vec::new();
+        let mut sampling_weights = Vec::new();
         for (i, s) in desc.shapes.into_iter().enumerate() {
             let emitter = s.emission.map(|radiance| {
+                sampling_weights.push(desc.sampling_weights.shape(i));
                 emitters.push(Emitter::Area(emitter::AreaLight {
                     shape: i as u32,
                     radiance,
@@ -68,7 +72,8 @@ impl Scene {
             shapes.push(Shape::new(s.geometry, i as u32, emitter));
         }
         let mut environment = None;
-        for e in &desc.emitters {
+        for (j, e) in desc.emitters.iter().enumerate() {
+            sampling_weights.push(desc.sampling_weights.emitter(j));
             let e = Emitter::from_desc(e);
             if e.is_environment() {
                 environment = Some(emitters.len() as u32);
@@ -78,6 +83,7 @@ impl Scene {
         let lights = Lights::build(
             LightSamplerKind::default(),
             &emitters,
+            &sampling_weights,
             &shapes,
             lights::scene_sphere(&shapes),
         );
@@ -93,6 +99,7 @@ impl Scene {
             environment,
             lights,
             world_origin: desc.world_origin,
+            sampling_weights,
             accel,
         }
     }

@@ -130,6 +130,7 @@ fn from_gltf(
             fov_x_degrees: horizontal_fov(yfov.to_degrees(), &film),
             near_clip: near,
             far_clip: far,
+            principal_point_offset: glam::Vec2::ZERO,
         },
         film,
     ))
@@ -170,6 +171,7 @@ fn default_camera(shapes: &[ShapeDesc], options: &GltfOptions) -> (CameraDesc, F
             fov_x_degrees: fov_x,
             near_clip: distance * 1e-3,
             far_clip: f32::INFINITY,
+            principal_point_offset: glam::Vec2::ZERO,
         },
         film,
     )

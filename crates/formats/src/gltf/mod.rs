@@ -193,6 +193,7 @@ pub fn load_gltf_with_warnings(
         // glTF positions are f32 in the file: rendered where they are.
         world_origin: glam::DVec3::ZERO,
         emitters,
+        sampling_weights: Default::default(),
     };
     Ok((desc, warnings))
 }

@@ -298,8 +298,8 @@ pub(crate) fn light_bounds(
 pub enum BvhLight {
     /// A light with a position: a leaf.
     Bounded(LightBounds),
-    /// A light at infinity.
-    Infinite,
+    /// A light at infinity, with its `sampling_weight` (> 0).
+    Infinite(f32),
     /// Sends no light: never chosen.
     Off,
 }
@@ -326,21 +326,31 @@ pub struct LightBvh {
     /// Per light primitive: its leaf, [`AT_INFINITY`] or [`NONE`].
     leaf_of: Vec<u32>,
     infinite: Vec<u32>,
+    /// Per light at infinity: the running sum of their sampling weights, normalised to end
+    /// at 1 (the choice among them is by weight).
+    infinite_cdf: Vec<f32>,
     /// Probability of choosing a light at infinity.
     p_infinite: f32,
 }
 
 impl LightBvh {
     /// Builds the tree over `lights` (indexed by light primitive); `None` if none emits.
-    pub fn build(lights: &[BvhLight]) -> Option<Self> {
+    /// The tree as a whole weighs `bounded_weight` against the sampling weights of the
+    /// lights at infinity (pbrt-v4's `BVHLightSampler` gives the tree and each light at
+    /// infinity one equal share; that is the case of all weights 1).
+    pub fn build(lights: &[BvhLight], bounded_weight: f32) -> Option<Self> {
         let mut leaf_of = vec![NONE; lights.len()];
         let mut infinite = Vec::new();
+        let mut infinite_cdf = Vec::new();
+        let mut infinite_sum = 0.0f32;
         let mut bounded = Vec::new();
         for (i, l) in lights.iter().enumerate() {
             match l {
-                BvhLight::Infinite => {
+                BvhLight::Infinite(w) if *w > 0.0 && w.is_finite() => {
                     leaf_of[i] = AT_INFINITY;
                     infinite.push(i as u32);
+                    infinite_sum += w;
+                    infinite_cdf.push(infinite_sum);
                 }
                 BvhLight::Bounded(b) if b.phi > 0.0 && b.phi.is_finite() => {
                     bounded.push((i as u32, *b))
@@ -351,12 +361,20 @@ impl LightBvh {
         if infinite.is_empty() && bounded.is_empty() {
             return None;
         }
-        let n_inf = infinite.len() as f32;
+        for c in &mut infinite_cdf {
+            *c /= infinite_sum;
+        }
+        let tree = if bounded.is_empty() {
+            0.0
+        } else {
+            bounded_weight
+        };
         let mut bvh = Self {
             nodes: Vec::with_capacity(2 * bounded.len()),
             leaf_of,
             infinite,
-            p_infinite: n_inf / (n_inf + if bounded.is_empty() { 0.0 } else { 1.0 }),
+            infinite_cdf,
+            p_infinite: infinite_sum / (infinite_sum + tree),
         };
         if !bounded.is_empty() {
             bvh.build_node(&mut bounded, NONE, 0);
@@ -407,8 +425,9 @@ impl LightBvh {
         let p_inf = self.p_infinite;
         if u < p_inf {
             let k = self.infinite.len();
-            let i = ((u / p_inf * k as f32) as usize).min(k - 1);
-            return Some((self.infinite[i] as usize, p_inf / k as f32));
+            let v = u / p_inf;
+            let i = self.infinite_cdf.partition_point(|&c| c <= v).min(k - 1);
+            return Some((self.infinite[i] as usize, p_inf * self.infinite_share(i)));
         }
         if self.nodes.is_empty() {
             return None;
@@ -439,7 +458,8 @@ impl LightBvh {
     pub fn pmf(&self, p: Vec3, n: Vec3, prim: usize) -> f32 {
         let leaf = self.leaf_of[prim];
         if leaf == AT_INFINITY {
-            return self.p_infinite / self.infinite.len() as f32;
+            let i = self.infinite.partition_point(|&q| (q as usize) < prim);
+            return self.p_infinite * self.infinite_share(i);
         }
         if leaf == NONE {
             return 0.0;
@@ -455,6 +475,17 @@ impl LightBvh {
             node = parent;
         }
         pmf
+    }
+
+    /// The probability of the `i`-th light at infinity among them.
+    #[inline]
+    fn infinite_share(&self, i: usize) -> f32 {
+        let lo = if i == 0 {
+            0.0
+        } else {
+            self.infinite_cdf[i - 1]
+        };
+        self.infinite_cdf[i] - lo
     }
 
     /// Probabilities of descending into the children `first` and `second` from (`p`, `n`):

@@ -102,11 +102,13 @@ enum Selector {
 
 impl Lights {
     /// Light primitives of `emitters` and the `kind` of structure to choose among them.
-    /// `scene_sphere` (centre, radius) bounds the geometry: lights at infinity send their
+    /// `sampling_weights` (by emitter; missing entries are 1) scale each emitter's share:
+    /// see [`weight_of`]. `scene_sphere` (centre, radius) bounds the geometry: lights at infinity send their
     /// power through it.
     pub fn build(
         kind: LightSamplerKind,
         emitters: &[Emitter],
+        sampling_weights: &[f32],
         shapes: &[Shape],
         scene_sphere: (Vec3, f32),
     ) -> Self {
@@ -121,6 +123,7 @@ impl Lights {
                 });
             }
         }
+        let weight = |p: &LightPrim| weight_of(sampling_weights, p.emitter);
         let power =
             |p: &LightPrim| emitters[p.emitter as usize].power(shapes, p.face, scene_sphere.1);
         // One emitter is one light, whatever its triangle count: its triangles are chosen in
@@ -134,7 +137,8 @@ impl Lights {
             (0, _) => Selector::Empty,
             (1, _) => Selector::Single,
             (_, LightSamplerKind::Uniform) => {
-                // Mitsuba: 1 / (number of emitters), then area within a mesh.
+                // Mitsuba: 1 / (number of emitters), or with sampling weights the emitter's
+                // weight over their sum (the table normalises), then area within a mesh.
                 let share = 1.0 / emitters.len() as f32;
                 let weights: Vec<f32> = prims
                     .iter()
@@ -142,18 +146,18 @@ impl Lights {
                         Emitter::Area(a) => {
                             let shape = &shapes[a.shape as usize];
                             if shape.area > 0.0 {
-                                share * shape.part_area(p.face) / shape.area
+                                weight(p) * share * shape.part_area(p.face) / shape.area
                             } else {
                                 0.0
                             }
                         }
-                        _ => share,
+                        _ => weight(p) * share,
                     })
                     .collect();
                 DiscreteDistribution::new(&weights).map_or(Selector::Empty, Selector::Table)
             }
             (_, LightSamplerKind::Power) => {
-                let weights: Vec<f32> = prims.iter().map(power).collect();
+                let weights: Vec<f32> = prims.iter().map(|p| weight(p) * power(p)).collect();
                 DiscreteDistribution::new(&weights).map_or(Selector::Empty, Selector::Table)
             }
             (_, LightSamplerKind::Bvh) => {
@@ -161,18 +165,30 @@ impl Lights {
                     .iter()
                     .map(|p| {
                         let e = &emitters[p.emitter as usize];
-                        let phi = power(p);
+                        let phi = weight(p) * power(p);
                         if !(phi > 0.0) {
                             BvhLight::Off
                         } else if e.is_infinite() {
-                            BvhLight::Infinite
+                            BvhLight::Infinite(weight(p))
                         } else {
                             bvh::light_bounds(e, shapes, p.face, phi)
                                 .map_or(BvhLight::Off, BvhLight::Bounded)
                         }
                     })
                     .collect();
-                LightBvh::build(&lights).map_or(Selector::Empty, Selector::Bvh)
+                // The tree's share against the lights at infinity: the mean weight of the
+                // emitters in it that can be chosen (1 when no weight is set).
+                let bounded: Vec<f32> = (0..emitters.len() as u32)
+                    .filter(|&e| !emitters[e as usize].is_infinite())
+                    .map(|e| weight_of(sampling_weights, e))
+                    .filter(|&w| w > 0.0)
+                    .collect();
+                let bounded_weight = if bounded.is_empty() {
+                    1.0
+                } else {
+                    bounded.iter().sum::<f32>() / bounded.len() as f32
+                };
+                LightBvh::build(&lights, bounded_weight).map_or(Selector::Empty, Selector::Bvh)
             }
         };
         Self {
@@ -234,6 +250,21 @@ impl Lights {
     }
 }
 
+/// The `sampling_weight` of emitter `e` (1 when `weights` has no entry for it).
+///
+/// Mitsuba (`src/render/scene.cpp`, `update_emitter_sampling_distribution`) chooses emitter
+/// e with probability w_e / Σw, so a weight says "this many times as many samples as a
+/// weight-1 emitter". radia's strategies keep that meaning by multiplying each emitter's
+/// share by w_e before normalising: uniform, w_e (Mitsuba's exactly); power, w_e · power;
+/// the light BVH, w_e · power as the power in its importance, and for lights at infinity
+/// w_e against the mean weight of the bounded emitters (see [`LightBvh::build`]). Every
+/// choice's probability is computed from the same weighted numbers it is sampled with, so
+/// the estimate stays unbiased for any weights ≥ 0; a weight-0 emitter is only reached by
+/// BSDF sampling.
+pub fn weight_of(weights: &[f32], e: u32) -> f32 {
+    weights.get(e as usize).copied().unwrap_or(1.0)
+}
+
 /// Centre and radius of the sphere around every shape (Mitsuba's scene bounding sphere, what
 /// lights at infinity shine through); the unit sphere when there are no shapes.
 pub fn scene_sphere(shapes: &[Shape]) -> (Vec3, f32) {
@@ -267,6 +298,7 @@ impl Scene {
         self.lights = Lights::build(
             kind,
             &self.emitters,
+            &self.sampling_weights,
             &self.shapes,
             scene_sphere(&self.shapes),
         );

@@ -54,12 +54,14 @@ fn scene(shapes: Vec<ShapeDesc>, emitters: Vec<EmitterDesc>, kind: LightSamplerK
             fov_x_degrees: 45.0,
             near_clip: 0.01,
             far_clip: 1e4,
+            principal_point_offset: glam::Vec2::ZERO,
         },
         film: FilmDesc::default(),
         sampler: SamplerDesc::default(),
         shapes,
         world_origin: glam::DVec3::ZERO,
         emitters,
+        sampling_weights: Default::default(),
     });
     s.set_light_sampler(kind);
     s
@@ -1054,4 +1056,140 @@ fn point_spot_directional_values() {
     let es = s.sample_emitter_direction(&ctx, 0.5, Vec2::ZERO).unwrap();
     assert!(es.is_delta && es.dist.is_infinite());
     assert!((es.d - Vec3::Y).length() < 1e-6 && es.radiance == Vec3::splat(3.0));
+}
+
+/// `many_lights` with pseudo-random `sampling_weight`s in {0, 0.25 … 4}, one of 7 emitters
+/// at 0 (never chosen by next-event estimation).
+fn weighted_lights(kind: LightSamplerKind) -> Scene {
+    let mut s = many_lights(kind, true);
+    s.sampling_weights = (0..s.emitters.len())
+        .map(|e| {
+            if e % 7 == 3 {
+                0.0
+            } else {
+                0.25 * (1 + (e * 5) % 16) as f32
+            }
+        })
+        .collect();
+    s.set_light_sampler(kind);
+    s
+}
+
+#[test]
+fn sampling_weights_keep_the_pmf_consistent_with_sampling() {
+    for kind in [
+        LightSamplerKind::Uniform,
+        LightSamplerKind::Power,
+        LightSamplerKind::Bvh,
+    ] {
+        let s = weighted_lights(kind);
+        let lights = &s.lights;
+        for ctx in contexts() {
+            let pmf: Vec<f64> = (0..lights.len())
+                .map(|i| lights.pmf(&ctx, i) as f64)
+                .collect();
+            let sum: f64 = pmf.iter().sum();
+            assert!(
+                (sum - 1.0).abs() < 1e-4,
+                "{kind} at {}: Σ pmf = {sum}",
+                ctx.p
+            );
+            for i in 0..lights.len() {
+                if s.sampling_weights[lights.prim(i).emitter as usize] == 0.0 {
+                    assert_eq!(pmf[i], 0.0, "{kind}: a weight-0 light is chosen");
+                }
+            }
+            for k in 0..2000 {
+                let u = (k as f32 + 0.5) / 2000.0;
+                let (i, p) = lights.sample(&ctx, u).expect("a light");
+                assert!(
+                    (p as f64 - pmf[i]).abs() <= 1e-5 * pmf[i],
+                    "{kind}: light {i}: sampled with {p}, pmf {}",
+                    pmf[i]
+                );
+            }
+            let r = chi2_test_discrete(
+                lights.len(),
+                1_000_000,
+                9,
+                alpha(),
+                |u, _| lights.sample(&ctx, u).map(|(i, _)| i),
+                |i| pmf[i],
+            );
+            assert!(r.passed, "{kind} at {}: {}", ctx.p, r.report);
+        }
+    }
+}
+
+#[test]
+fn sampling_weights_mean_what_mitsuba_means() {
+    let ctx = contexts()[0];
+    let per_emitter = |s: &Scene| {
+        let mut p = vec![0.0f64; s.emitters.len()];
+        for i in 0..s.lights.len() {
+            p[s.lights.prim(i).emitter as usize] += s.lights.pmf(&ctx, i) as f64;
+        }
+        p
+    };
+    // Uniform is Mitsuba's scene.cpp exactly: emitter e with probability w_e / Σw.
+    let s = weighted_lights(LightSamplerKind::Uniform);
+    let total: f64 = s.sampling_weights.iter().map(|&w| w as f64).sum();
+    for (e, p) in per_emitter(&s).iter().enumerate() {
+        let expected = s.sampling_weights[e] as f64 / total;
+        assert!(
+            (p - expected).abs() < 1e-5,
+            "emitter {e}: {p} vs {expected}"
+        );
+    }
+    // Power and BVH: a weight multiplies the emitter's odds against every other emitter.
+    for kind in [LightSamplerKind::Power, LightSamplerKind::Bvh] {
+        let plain = per_emitter(&many_lights(kind, true));
+        let weighted = per_emitter(&weighted_lights(kind));
+        let w = weighted_lights(kind).sampling_weights;
+        // Power: any two emitters (0 and 1 are a sphere and a disk). BVH: the two at
+        // infinity (the tree's inner nodes merge bounds, so between two bounded lights a
+        // weight is not an exact factor on the odds, only on the light's own importance).
+        let n = w.len();
+        let pairs: &[(usize, usize)] = if kind == LightSamplerKind::Power {
+            &[(0, 1), (0, 2), (n - 2, n - 1), (1, n - 1)]
+        } else {
+            &[(n - 2, n - 1)]
+        };
+        for &(a, b) in pairs {
+            assert!(
+                plain[a] > 0.0 && plain[b] > 0.0,
+                "{kind}: {a}, {b} never chosen"
+            );
+            let odds = (weighted[a] / weighted[b]) / (plain[a] / plain[b]);
+            let expected = (w[a] / w[b]) as f64;
+            let tol = 1e-4;
+            assert!(
+                (odds / expected - 1.0).abs() < tol,
+                "{kind}: emitters {a}, {b}: odds ×{odds}, weights ×{expected}"
+            );
+        }
+    }
+}
+
+#[test]
+fn sampling_weight_multiplies_a_bvh_leafs_odds() {
+    // Two lights: the tree's root has the two leaves as children, so the weight is an exact
+    // factor on the odds of one against the other.
+    let shapes = || {
+        vec![
+            emitting(disk(Vec3::new(0.0, 1.0, 0.0), 0.1, -Vec3::Y), Vec3::ONE),
+            emitting(disk(Vec3::new(3.0, 1.0, 0.0), 0.1, -Vec3::Y), Vec3::ONE),
+        ]
+    };
+    let ctx = LightContext {
+        p: Vec3::ZERO,
+        n: Vec3::Y,
+    };
+    let plain = scene(shapes(), vec![], LightSamplerKind::Bvh);
+    let mut weighted = scene(shapes(), vec![], LightSamplerKind::Bvh);
+    weighted.sampling_weights = vec![1.0, 3.0];
+    weighted.set_light_sampler(LightSamplerKind::Bvh);
+    let odds = |s: &Scene| s.lights.pmf(&ctx, 1) / s.lights.pmf(&ctx, 0);
+    let ratio = odds(&weighted) / odds(&plain);
+    assert!((ratio - 3.0).abs() < 1e-4, "odds ×{ratio}");
 }

@@ -11,7 +11,7 @@ use super::xml::{Doc, Kind};
 use super::LoadError;
 use crate::{
     parse_aovs, AovDesc, CameraDesc, ClassicDesc, ClassicShading, EmitterDesc, FilmDesc,
-    FilterDesc, IntegratorDesc, NprDesc, NprStyle, SamplerDesc, SceneDescription,
+    FilterDesc, IntegratorDesc, NprDesc, NprStyle, SamplerDesc, SamplingWeights, SceneDescription,
 };
 use glam::{Affine3A, DMat4, DVec3};
 use radia_bsdf::{Bsdf, Texture};
@@ -81,6 +81,7 @@ pub(crate) fn build_scene(doc: &Doc) -> Result<(SceneDescription, Vec<String>), 
     let mut sensor: Option<(CameraDesc, FilmDesc, SamplerDesc)> = None;
     let mut shapes = Vec::new();
     let mut emitters = Vec::new();
+    let mut sampling_weights = SamplingWeights::default();
     let mut sensors_seen = 0;
 
     for (i, n, kind) in p.objects() {
@@ -102,9 +103,14 @@ pub(crate) fn build_scene(doc: &Doc) -> Result<(SceneDescription, Vec<String>), 
                     sensor = Some(s);
                 }
             }
-            Kind::Shape => shapes.push(build_shape(&mut b, n)?),
+            Kind::Shape => {
+                let (shape, weight) = build_shape(&mut b, n)?;
+                shapes.push(shape);
+                sampling_weights.shapes.push(weight);
+            }
             Kind::Emitter => {
-                let e = build_emitter(&b, n)?;
+                let (e, weight) = build_emitter(&b, n)?;
+                sampling_weights.emitters.push(weight);
                 // Mitsuba's Scene constructor: at most one `constant` or `envmap`.
                 if e.is_environment() && emitters.iter().any(EmitterDesc::is_environment) {
                     return Err(p.err_at(
@@ -148,6 +154,30 @@ pub(crate) fn build_scene(doc: &Doc) -> Result<(SceneDescription, Vec<String>), 
             doc.file.display()
         ));
     }
+    // Only emitters' weights count (a shape without an area emitter has weight 1 here).
+    let weights = shapes
+        .iter()
+        .zip(&sampling_weights.shapes)
+        .filter(|(s, _)| s.emission.is_some())
+        .map(|(_, w)| *w)
+        .chain(sampling_weights.emitters.iter().copied());
+    let (mut any, mut all_zero, mut all_one) = (false, true, true);
+    for w in weights {
+        any = true;
+        all_zero &= w == 0.0;
+        all_one &= w == 1.0;
+    }
+    if any && all_zero {
+        // Mitsuba's DiscreteDistribution: "no probability mass found".
+        return Err(LoadError::at(
+            &doc.file,
+            doc.nodes[0].pos,
+            "every emitter has \"sampling_weight\" 0: next-event estimation would have no light to choose",
+        ));
+    }
+    if all_one {
+        sampling_weights = SamplingWeights::default();
+    }
     let desc = SceneDescription {
         integrator: integrator.unwrap_or_default(),
         camera,
@@ -156,6 +186,7 @@ pub(crate) fn build_scene(doc: &Doc) -> Result<(SceneDescription, Vec<String>), 
         shapes,
         emitters,
         world_origin: b.world_origin,
+        sampling_weights,
     };
     Ok((desc, b.warnings))
 }
@@ -539,6 +570,22 @@ fn build_sensor(
     let fov_x =
         horizontal_fov(fov, fov_axis, focal_length, aspect).map_err(|e| p.err_at(fov_pos, e))?;
 
+    // Mitsuba reads any float here; radia refuses what would put NaN or Inf into every ray.
+    let mut principal_point_offset = glam::Vec2::ZERO;
+    for (axis, name) in ["principal_point_offset_x", "principal_point_offset_y"]
+        .into_iter()
+        .enumerate()
+    {
+        let v = p.float(name, 0.0)? as f32;
+        if !v.is_finite() {
+            return Err(p.err_at(
+                p.pos_of(name),
+                format!("the '{name}' parameter must be a finite number, got {v}"),
+            ));
+        }
+        principal_point_offset[axis] = v;
+    }
+
     let to_world = b.to_world(&mut p)?;
     if transform::has_scale(&to_world) {
         return Err(p.err_at(
@@ -553,6 +600,7 @@ fn build_sensor(
         fov_x_degrees: fov_x as f32,
         near_clip: near_clip as f32,
         far_clip: far_clip as f32,
+        principal_point_offset,
     };
     Ok((camera, film, sampler))
 }

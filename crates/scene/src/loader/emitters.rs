@@ -11,9 +11,10 @@ use crate::EmitterDesc;
 use glam::{Affine3A, DMat4, DVec3};
 use radia_bsdf::Texture;
 
-/// A top-level emitter.
-pub(crate) fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<EmitterDesc, LoadError> {
+/// A top-level emitter and its `sampling_weight`.
+pub(crate) fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<(EmitterDesc, f32), LoadError> {
     let mut p = Props::new(b.doc, idx);
+    let weight = sampling_weight(&mut p)?;
     let e = match p.node.plugin.as_str() {
         "constant" => EmitterDesc::Constant {
             radiance: p.color("radiance", 1.0, false)?.as_vec3(),
@@ -106,18 +107,33 @@ pub(crate) fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<EmitterDesc, 
         }
     };
     p.finish()?;
-    Ok(e)
+    Ok((e, weight))
+}
+
+/// `sampling_weight` (`src/render/emitter.cpp`, default 1). Mitsuba's emitter-selection
+/// `DiscreteDistribution` (`include/mitsuba/core/distr_1d.h`) throws on a negative entry;
+/// radia also refuses NaN and infinity.
+fn sampling_weight(p: &mut Props<'_>) -> Result<f32, LoadError> {
+    let w = p.float("sampling_weight", 1.0)?;
+    if !(w.is_finite() && w >= 0.0) {
+        return Err(p.err_at(
+            p.pos_of("sampling_weight"),
+            format!("\"sampling_weight\" must be a finite number >= 0, got {w}"),
+        ));
+    }
+    Ok(w as f32)
 }
 
 /// The `area` emitter of a shape (`src/emitters/area.cpp`): its radiance, a colour or a
-/// texture (`get_texture<Texture>("radiance")`, unbounded).
-pub(crate) fn area_emitter(b: &mut Builder<'_>, idx: usize) -> Result<Texture, LoadError> {
+/// texture (`get_texture<Texture>("radiance")`, unbounded), and its `sampling_weight`.
+pub(crate) fn area_emitter(b: &mut Builder<'_>, idx: usize) -> Result<(Texture, f32), LoadError> {
     let mut p = Props::new(b.doc, idx);
     match p.node.plugin.as_str() {
         "area" => {
+            let weight = sampling_weight(&mut p)?;
             let radiance = super::textures::texture_param(b, &mut p, "radiance", 1.0, false)?;
             p.finish()?;
-            Ok(radiance)
+            Ok((radiance, weight))
         }
         other => Err(p.err(format!(
             "emitter type \"{other}\" cannot be attached to a shape (only \"area\" can)"

@@ -13,13 +13,15 @@ use crate::{Geometry, ShapeDesc};
 use glam::{DMat3, DMat4, DVec3};
 use std::path::{Path, PathBuf};
 
-pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<ShapeDesc, LoadError> {
+/// A shape and the `sampling_weight` of its area emitter (1 if it has none).
+pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<(ShapeDesc, f32), LoadError> {
     let mut p = Props::new(b.doc, idx);
     let origin = format!("{}:{}", b.doc.file.display(), p.node.pos.line);
 
     // Children: one BSDF, one emitter (Mitsuba's Shape constructor).
     let mut bsdf = None;
     let mut emission = None;
+    let mut sampling_weight = 1.0;
     for (i, n, kind) in p.objects() {
         match kind {
             Kind::Bsdf => {
@@ -40,7 +42,9 @@ pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<ShapeDesc, 
                     ));
                 }
                 p.take(i);
-                emission = Some(area_emitter(b, n)?);
+                let (radiance, weight) = area_emitter(b, n)?;
+                emission = Some(radiance);
+                sampling_weight = weight;
             }
             _ => {} // reported by `finish`
         }
@@ -149,12 +153,13 @@ pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<ShapeDesc, 
     p.finish()?;
 
     let is_emitter = emission.is_some();
-    Ok(ShapeDesc {
+    let shape = ShapeDesc {
         geometry,
         bsdf: bsdf.unwrap_or_else(|| default_bsdf(is_emitter)),
         emission,
         origin,
-    })
+    };
+    Ok((shape, sampling_weight))
 }
 
 /// `raw` subdivided and displaced as the shape asks (unchanged without a modifier).

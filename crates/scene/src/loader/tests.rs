@@ -321,6 +321,107 @@ fn loader_lookat_matrix_columns() {
 }
 
 #[test]
+fn loader_principal_point_offset_shifts_the_image_plane() {
+    // Camera at the origin looking along +z with local +x = world +x (look_at: left = up ×
+    // dir). fov_x 90° on a 200x100 film: tan_half_x = 1, tan_half_y = 0.5. Mitsuba's
+    // perspective.cpp adds the offset to the film position before projecting, so film (u, v)
+    // looks along ((1 − 2(u + 0.1))·1, (1 − 2(v − 0.05))·0.5, 1). The world point
+    // (−0.3, 0.1, 1) solves that at u = 0.55, v = 0.45 by hand.
+    let s = load_ok(
+        "principal-point",
+        r#"<sensor type="perspective"><float name="fov" value="90"/>
+        <float name="principal_point_offset_x" value="0.1"/>
+        <float name="principal_point_offset_y" value="-0.05"/>
+        <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="200"/><integer name="height" value="100"/></film></sensor>"#,
+    );
+    assert_eq!(s.camera.principal_point_offset, Vec2::new(0.1, -0.05));
+    let camera = crate::Camera::new(&s.camera, 200, 100);
+    let ray = camera.generate_ray(Vec2::new(0.55, 0.45));
+    let expected = Vec3::new(-0.3, 0.1, 1.0).normalize();
+    assert_vec_close(
+        ray.d,
+        expected,
+        1e-6,
+        "ray towards the hand-projected point",
+    );
+    // Without the offset the same film position looks elsewhere (the test can fail).
+    let centred = crate::Camera::new(
+        &crate::CameraDesc {
+            principal_point_offset: Vec2::ZERO,
+            ..s.camera.clone()
+        },
+        200,
+        100,
+    );
+    assert!((centred.generate_ray(Vec2::new(0.55, 0.45)).d - expected).length() > 0.1);
+
+    for (name, value) in [
+        ("principal_point_offset_x", "nan"),
+        ("principal_point_offset_y", "inf"),
+    ] {
+        let e = expect_err(
+            load(
+                "principal-point-bad",
+                &format!(
+                    r#"<sensor type="perspective">
+                    <float name="{name}" value="{value}"/></sensor>"#
+                ),
+            ),
+            "must be a finite number",
+        );
+        assert!(e.to_string().contains(name), "{e}");
+    }
+}
+
+#[test]
+fn loader_sampling_weights() {
+    let s = load_ok(
+        "sampling-weights",
+        r#"<shape type="sphere"/>
+        <shape type="sphere"><emitter type="area"><float name="sampling_weight" value="0.25"/></emitter></shape>
+        <emitter type="point"><integer name="sampling_weight" value="3"/></emitter>
+        <emitter type="constant"/>"#,
+    );
+    assert_eq!(s.sampling_weights.shape(1), 0.25);
+    assert_eq!(s.sampling_weights.emitter(0), 3.0);
+    assert_eq!(s.sampling_weights.emitter(1), 1.0, "the default is 1");
+    // The scene gives them to the light selection by emitter: area lights first.
+    let scene = crate::Scene::build(s);
+    assert_eq!(scene.sampling_weights, vec![0.25, 3.0, 1.0]);
+
+    let plain = load_ok("sampling-weights-none", r#"<emitter type="point"/>"#);
+    assert_eq!(plain.sampling_weights, crate::SamplingWeights::default());
+
+    for (value, needle) in [
+        (
+            "-1",
+            "\"sampling_weight\" must be a finite number >= 0, got -1",
+        ),
+        ("nan", "must be a finite number >= 0"),
+    ] {
+        expect_err(
+            load(
+                "sampling-weight-bad",
+                &format!(
+                    r#"<shape type="sphere"><emitter type="area">
+                    <float name="sampling_weight" value="{value}"/></emitter></shape>"#
+                ),
+            ),
+            needle,
+        );
+    }
+    expect_err(
+        load(
+            "sampling-weight-all-zero",
+            r#"<emitter type="point"><float name="sampling_weight" value="0"/></emitter>
+            <shape type="sphere"><emitter type="area"><float name="sampling_weight" value="0"/></emitter></shape>"#,
+        ),
+        "every emitter has \"sampling_weight\" 0",
+    );
+}
+
+#[test]
 fn loader_camera_lookat_and_clips() {
     let s = load_ok(
         "camera",
