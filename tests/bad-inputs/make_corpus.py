@@ -80,6 +80,9 @@ CASES = [
     ("ref-cycle.xml", "ref-cycle.xml:", scene('    <bsdf type="twosided" id="a">\n        <ref id="a"/>\n    </bsdf>\n' + SPHERE)),
     ("ref-wrong-kind.xml", "ref-wrong-kind.xml:", scene('    <emitter type="point" id="lamp"/>\n' + shape_with_bsdf('        <ref id="lamp"/>\n'))),
     ("recursive-include.xml", "recursive-include.xml:8:5", scene('    <include filename="recursive-include.xml"/>\n')),
+    ("include-missing.xml", "include-missing.xml:8:5", scene('    <include filename="data/no-such-include.xml"/>\n')),
+    ("include-cycle.xml", "data/include-cycle-b.xml:2:5", scene('    <include filename="data/include-cycle-b.xml"/>\n')),
+    ("include-bad-content.xml", "data/include-bad-bsdf.xml:1:1", scene('    <shape type="sphere">\n        <include filename="data/include-bad-bsdf.xml"/>\n    </shape>\n')),
     ("undefined-parameter.xml", "undefined-parameter.xml:9:9", scene('    <shape type="sphere">\n        <float name="radius" value="$size"/>\n    </shape>\n')),
     # ---- missing files ----
     ("missing-mesh-file.xml", "missing-mesh-file.xml:8:5", scene('    <shape type="ply">\n        <string name="filename" value="data/no-such-mesh.ply"/>\n    </shape>\n')),
@@ -276,6 +279,9 @@ def data_files():
     write("xml-binary-garbage.xml", garbage)
     write("glb-bad-magic.glb", b"glTX" + struct.pack("<II", 2, 64) + garbage[:52])
     gltf_files(write)
+    # Included by include-cycle.xml, and including it again; a lone <bsdf> of no known type.
+    write("data/include-cycle-b.xml", '<scene version="3.0.0">\n    <include filename="../include-cycle.xml"/>\n</scene>\n')
+    write("data/include-bad-bsdf.xml", '<bsdf version="3.0.0" type="no-such-bsdf"/>\n')
 
     # PLY: a valid binary triangle, then faults.
     hdr = ("ply\nformat binary_little_endian 1.0\nelement vertex {n}\nproperty float x\n"

@@ -465,7 +465,7 @@ fn phong(b: &mut Builder<'_>, mut p: Props<'_>, blinn: bool) -> Result<Bsdf, Loa
     if kd.max_value() + ks.max_value() > 1.0 && sum_exceeds_one(&kd, &ks) {
         b.warnings.push(format!(
             "{}:{}: {}: diffuse_reflectance + specular_reflectance exceeds 1: the material creates energy",
-            b.doc.file.display(),
+            b.doc.file_of(p.node).display(),
             p.node.pos,
             p.node.plugin
         ));

@@ -663,7 +663,7 @@ fn build_film(b: &Builder<'_>, idx: usize) -> Result<FilmDesc, LoadError> {
         }
     }
     let width_pos = p.pos_of("width");
-    let file = p.doc.file.clone();
+    let file = p.doc.file_of(p.node).to_path_buf();
     p.finish()?;
     let film = FilmDesc {
         width: width as u32,

@@ -24,11 +24,11 @@ impl<'a> Props<'a> {
 
     /// An error at the node's element.
     pub fn err(&self, msg: impl Into<String>) -> LoadError {
-        LoadError::at(&self.doc.file, self.node.pos, msg)
+        LoadError::at(self.doc.file_of(self.node), self.node.pos, msg)
     }
 
     pub fn err_at(&self, pos: TextPos, msg: impl Into<String>) -> LoadError {
-        LoadError::at(&self.doc.file, pos, msg)
+        LoadError::at(self.doc.file_of(self.node), pos, msg)
     }
 
     fn find(&self, name: &str) -> Option<usize> {

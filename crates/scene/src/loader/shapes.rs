@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 /// A shape and the `sampling_weight` of its area emitter (1 if it has none).
 pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<(ShapeDesc, f32), LoadError> {
     let mut p = Props::new(b.doc, idx);
-    let origin = format!("{}:{}", b.doc.file.display(), p.node.pos.line);
+    let origin = format!("{}:{}", b.doc.file_of(p.node).display(), p.node.pos.line);
 
     // Children: one BSDF, one emitter (Mitsuba's Shape constructor).
     let mut bsdf = None;
@@ -67,7 +67,7 @@ pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<(ShapeDesc,
                 None => return Err(p.err(format!("<shape type=\"{plugin}\">: the \"filename\" parameter is required"))),
             };
             let path = resolve_path(&b.doc.dir, filename);
-            let (file, line, col) = (&b.doc.file, p.node.pos.line, p.node.pos.col);
+            let (file, line, col) = (b.doc.file_of(p.node), p.node.pos.line, p.node.pos.col);
             let data = super::read_regular_file(&path).map_err(|e| {
                 let what = if e.kind() == std::io::ErrorKind::NotFound { "not found".to_string() } else { e.to_string() };
                 LoadError::at(
@@ -124,7 +124,7 @@ pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<(ShapeDesc,
             if !uniform || !orthogonal {
                 b.warnings.push(format!(
                     "{}:{}:{}: sphere: to_world should not contain non-uniform scaling or shearing; using radius {world_radius}",
-                    b.doc.file.display(),
+                    b.doc.file_of(p.node).display(),
                     p.node.pos.line,
                     p.node.pos.col
                 ));
@@ -189,7 +189,7 @@ fn mesh_geometry(
         .map_err(|e| p.err(format!("\"{name}\": {e}")))?;
     let where_ = format!(
         "{}:{}:{}",
-        b.doc.file.display(),
+        b.doc.file_of(p.node).display(),
         p.node.pos.line,
         p.node.pos.col
     );

@@ -2293,5 +2293,138 @@ fn translated_scene_loads_as_the_same_render_space() {
         a.fingerprint(),
         b.fingerprint(),
         "the origin is part of the scene"
+
+// ---------------------------------------------------------------------------------------
+// <include>
+
+#[test]
+fn loader_include_merges_scenes_and_objects() {
+    // parts/shapes.xml: a <scene> root, its children join the including scene; it includes
+    // red.xml from its own directory (parser.cpp resolves relative to the including file).
+    let dir = write_files(
+        "include",
+        &[
+            (
+                "parts/shapes.xml",
+                br#"<scene version="3.0.0">
+    <bsdf type="diffuse" id="grey"><rgb name="reflectance" value="$grey"/></bsdf>
+    <shape type="sphere"><float name="radius" value="2"/>
+        <include filename="red.xml"/>
+    </shape>
+</scene>
+"#,
+            ),
+            (
+                "parts/red.xml",
+                br#"<bsdf version="3.0.0" type="diffuse"><rgb name="reflectance" value="0.8, 0.1, 0.1"/></bsdf>
+"#,
+            ),
+        ],
+    );
+    let s = load_in(
+        &dir,
+        &scene_xml(
+            r#"<default name="grey" value="0.25"/>
+            <include filename="parts/shapes.xml"/>
+            <shape type="sphere"><ref id="grey"/></shape>"#,
+        ),
+        &[],
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.shapes.len(), 2);
+    assert_vec_close(
+        diffuse_color(&s.shapes[0].bsdf),
+        Vec3::new(0.8, 0.1, 0.1),
+        1e-6,
+        "included bsdf",
+    );
+    assert_vec_close(
+        diffuse_color(&s.shapes[1].bsdf),
+        Vec3::splat(0.25),
+        1e-6,
+        "id and $grey from the include",
+    );
+    assert!(
+        s.shapes[0].origin.contains("shapes.xml:3"),
+        "{}",
+        s.shapes[0].origin
+    );
+}
+
+#[test]
+fn loader_include_errors_name_the_files() {
+    // A missing file: the including file and line.
+    let dir = temp_dir("include-missing");
+    let e = expect_err(
+        load_in(&dir, &scene_xml(r#"<include filename="nope.xml"/>"#), &[]),
+        "included file \"nope.xml\" not found",
+    );
+    assert!(e.file.ends_with("scene.xml") && e.line == Some(4), "{e}");
+
+    // A file that includes the file that includes it: the whole chain.
+    let dir = write_files(
+        "include-cycle",
+        &[(
+            "b.xml",
+            br#"<scene version="3.0.0">
+    <include filename="scene.xml"/>
+</scene>
+"#,
+        )],
+    );
+    let e = expect_err(
+        load_in(&dir, &scene_xml(r#"<include filename="b.xml"/>"#), &[]),
+        "recursive <include>",
+    );
+    let shown = e.to_string();
+    assert!(e.file.ends_with("b.xml") && e.line == Some(2), "{shown}");
+    assert!(
+        shown.contains("scene.xml:4 includes ") && shown.contains("b.xml:2 includes "),
+        "{shown}"
+    );
+
+    // A mistake inside an included file: that file's line, and where it was included.
+    let dir = write_files(
+        "include-bad",
+        &[(
+            "bad.xml",
+            br#"<scene version="3.0.0">
+    <shape type="sphere"><float name="radius" value="one"/></shape>
+</scene>
+"#,
+        )],
+    );
+    let e = expect_err(
+        load_in(&dir, &scene_xml(r#"<include filename="bad.xml"/>"#), &[]),
+        "could not parse floating point value",
+    );
+    assert!(e.file.ends_with("bad.xml") && e.line == Some(2), "{e}");
+    assert!(e.to_string().contains("(included from "), "{e}");
+    // ... and the errors found later, while building the scene, name the included file too.
+    let dir = write_files(
+        "include-bad-build",
+        &[("bad.xml", br#"<bsdf version="3.0.0" type="no-such-bsdf"/>"#)],
+    );
+    let e = expect_err(
+        load_in(
+            &dir,
+            &scene_xml(r#"<shape type="sphere"><include filename="bad.xml"/></shape>"#),
+            &[],
+        ),
+        "no-such-bsdf",
+    );
+    assert!(e.file.ends_with("bad.xml"), "{e}");
+    // The root of an included file needs its version, like any root.
+    let dir = write_files(
+        "include-no-version",
+        &[("v.xml", br#"<bsdf type="diffuse"/>"#)],
+    );
+    expect_err(
+        load_in(
+            &dir,
+            &scene_xml(r#"<shape type="sphere"><include filename="v.xml"/></shape>"#),
+            &[],
+        ),
+        "missing required attribute \"version\"",
     );
 }

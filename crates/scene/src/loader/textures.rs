@@ -155,10 +155,11 @@ fn bitmap(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Texture, LoadError> {
     };
     let path = resolve_path(&b.doc.dir, filename);
     let pos = p.node.pos;
+    let file = b.doc.file_of(p.node).to_path_buf();
     p.finish()?;
     let fail = |e: String| {
         LoadError::at(
-            &b.doc.file,
+            &file,
             pos,
             format!(
                 "texture file \"{}\" (filename=\"{filename}\"): {e}",
@@ -181,7 +182,7 @@ fn bitmap(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Texture, LoadError> {
         // Mitsuba's warning (it tests each texel's luminance; radia the largest channel).
         b.warnings.push(format!(
             "{}:{pos}: bitmap texture \"{filename}\" contains pixels that exceed the [0, 1] range",
-            b.doc.file.display(),
+            file.display(),
         ));
     }
     Ok(bitmap.into())

@@ -92,6 +92,8 @@ pub(crate) struct Node {
     /// The `type` attribute ("scene" for the root).
     pub plugin: String,
     pub id: Option<String>,
+    /// Index into [`Doc::files`] of the file the node is declared in.
+    pub file: u32,
     pub pos: TextPos,
     /// Properties in document order; nested objects get the names `_arg_0`, `_arg_1`, ...
     /// unless they have a `name` attribute.
@@ -113,10 +115,25 @@ impl Node {
 #[derive(Clone, Debug)]
 pub(crate) struct Doc {
     pub file: PathBuf,
-    /// Directory of the scene file: relative mesh paths start here.
+    /// Directory of the scene file: relative mesh paths start here, also in included files
+    /// (Mitsuba's parser.cpp adds the including file's directory to the file resolver only
+    /// while it finds and parses an `<include>`; plugins resolve their files later, with the
+    /// scene's resolver).
     pub dir: PathBuf,
+    /// `files[0]` is `file`; then every file read through `<include>`.
+    pub files: Vec<PathBuf>,
     pub nodes: Vec<Node>,
 }
+
+impl Doc {
+    /// The file node `n` was declared in (for messages).
+    pub fn file_of(&self, n: &Node) -> &Path {
+        &self.files[n.file as usize]
+    }
+}
+
+/// Mitsuba's `ParserConfig::max_include_depth` (`include/mitsuba/core/parser.h`).
+const MAX_INCLUDE_DEPTH: usize = 15;
 
 /// Deeper element nesting than this is refused (the parsers recurse).
 const MAX_DEPTH: usize = 100;
@@ -216,43 +233,7 @@ pub(crate) fn parse_str(
     defines: &[(String, String)],
 ) -> Result<Doc, LoadError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    // roxmltree recurses once per nesting level: refuse absurd nesting before it overflows
-    // the stack.
-    if let Some(offset) = nesting_exceeds(text, MAX_DEPTH) {
-        let line = text[..offset].matches('\n').count() + 1;
-        let col = text[..offset]
-            .rsplit('\n')
-            .next()
-            .map_or(0, |l| l.chars().count())
-            + 1;
-        return Err(LoadError::at(
-            path,
-            TextPos {
-                line: line as u32,
-                col: col as u32,
-            },
-            format!("elements are nested more than {MAX_DEPTH} levels deep"),
-        ));
-    }
-    let xml = roxmltree::Document::parse(text).map_err(|e| {
-        let p = e.pos();
-        let mut msg = e.to_string();
-        // roxmltree appends " at ROW:COL"; the position is already in front.
-        if let Some(i) = msg.rfind(" at ") {
-            if msg[i + 4..].chars().all(|c| c.is_ascii_digit() || c == ':') {
-                msg.truncate(i);
-            }
-        }
-        LoadError::at(
-            path,
-            TextPos {
-                line: p.row,
-                col: p.col,
-            },
-            format!("malformed XML: {msg}"),
-        )
-    })?;
-
+    let xml = parse_xml(path, text)?;
     let mut params: Vec<Param> = Vec::new();
     for (name, value) in defines {
         if name.is_empty() || name.contains('$') {
@@ -275,11 +256,16 @@ pub(crate) fn parse_str(
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let mut parser = Parser {
         file: path,
+        file_index: 0,
         xml: &xml,
         params,
         nodes: Vec::new(),
         ids: HashMap::new(),
         upgrade_v1: false,
+        files: vec![path.to_path_buf()],
+        chain: Vec::new(),
+        dir: dir.clone(),
+        at_included_root: false,
     };
 
     let root = xml.root_element();
@@ -293,20 +279,7 @@ pub(crate) fn parse_str(
             ),
         ));
     }
-    let version = root.attribute("version").ok_or_else(|| {
-        parser.err(
-            root_pos,
-            "missing required attribute \"version\" in the root element <scene>",
-        )
-    })?;
-    let major = parse_version(version).ok_or_else(|| {
-        parser.err(
-            root_pos,
-            format!("invalid version number \"{version}\" (expected e.g. \"3.0.0\")"),
-        )
-    })?;
-    // Files older than 2.0.0 use camelCase parameter names (Mitsuba's `upgrade_from_v1`).
-    parser.upgrade_v1 = major < 2;
+    parser.read_version(root)?;
 
     let mut counter = 0;
     parser.element(root, None, &mut counter, 0)?;
@@ -325,15 +298,58 @@ pub(crate) fn parse_str(
         ));
     }
 
-    let Parser { nodes, ids, .. } = parser;
+    let Parser {
+        nodes, ids, files, ..
+    } = parser;
     let mut doc = Doc {
         file: path.to_path_buf(),
         dir,
+        files,
         nodes,
     };
     resolve_refs(&mut doc, &ids)?;
     check_cycles(&doc)?;
     Ok(doc)
+}
+
+/// The XML tree of `text` (read from `path`), refusing absurd nesting first.
+fn parse_xml<'x>(path: &Path, text: &'x str) -> Result<roxmltree::Document<'x>, LoadError> {
+    // roxmltree recurses once per nesting level: refuse absurd nesting before it overflows
+    // the stack.
+    if let Some(offset) = nesting_exceeds(text, MAX_DEPTH) {
+        let line = text[..offset].matches('\n').count() + 1;
+        let col = text[..offset]
+            .rsplit('\n')
+            .next()
+            .map_or(0, |l| l.chars().count())
+            + 1;
+        return Err(LoadError::at(
+            path,
+            TextPos {
+                line: line as u32,
+                col: col as u32,
+            },
+            format!("elements are nested more than {MAX_DEPTH} levels deep"),
+        ));
+    }
+    roxmltree::Document::parse(text).map_err(|e| {
+        let p = e.pos();
+        let mut msg = e.to_string();
+        // roxmltree appends " at ROW:COL"; the position is already in front.
+        if let Some(i) = msg.rfind(" at ") {
+            if msg[i + 4..].chars().all(|c| c.is_ascii_digit() || c == ':') {
+                msg.truncate(i);
+            }
+        }
+        LoadError::at(
+            path,
+            TextPos {
+                line: p.row,
+                col: p.col,
+            },
+            format!("malformed XML: {msg}"),
+        )
+    })
 }
 
 /// "X.Y.Z" with three numeric parts (Mitsuba's `util::Version`); returns X.
@@ -451,14 +467,171 @@ fn attr<'a>(attrs: &'a [Attr<'_>], name: &str) -> Option<&'a str> {
 
 struct Parser<'a, 'x> {
     file: &'a Path,
+    /// Index of `file` in `files`.
+    file_index: u32,
     xml: &'a roxmltree::Document<'x>,
     params: Vec<Param>,
     nodes: Vec<Node>,
     ids: HashMap<String, (usize, TextPos)>,
     upgrade_v1: bool,
+    /// Every file read so far (the scene, then included files).
+    files: Vec<PathBuf>,
+    /// The `<include>`s being processed, outermost first: the canonical path of each file
+    /// being included, and how messages show where it was included from.
+    chain: Vec<(PathBuf, String)>,
+    /// Directory of the scene file.
+    dir: PathBuf,
+    /// Set while the root element of an included file (not a `<scene>`) is read.
+    at_included_root: bool,
 }
 
 impl<'a, 'x> Parser<'a, 'x> {
+    /// The root's `version` attribute (required, as in Mitsuba's `parse_file_impl`); files
+    /// older than 2.0.0 use camelCase parameter names (Mitsuba's `upgrade_from_v1`).
+    fn read_version(&mut self, root: roxmltree::Node) -> Result<(), LoadError> {
+        let root_pos = self.pos_of(root);
+        let tag = root.tag_name().name();
+        let version = root.attribute("version").ok_or_else(|| {
+            self.err(
+                root_pos,
+                format!("missing required attribute \"version\" in the root element <{tag}>"),
+            )
+        })?;
+        let major = parse_version(version).ok_or_else(|| {
+            self.err(
+                root_pos,
+                format!("invalid version number \"{version}\" (expected e.g. \"3.0.0\")"),
+            )
+        })?;
+        self.upgrade_v1 = major < 2;
+        Ok(())
+    }
+
+    /// `<include filename="..."/>` (Mitsuba's parser.cpp, `TagType::Include`): the file is
+    /// found relative to the including file's directory (then the scene's), parsed with the
+    /// same parameters, and merged: the children of a `<scene>` root join `parent`; any other
+    /// root (one object, e.g. a `<bsdf>`) becomes a child of `parent`, named by the
+    /// include's `name` attribute if it has one. Mitsuba stops at 15 nested includes; radia
+    /// also names the chain of files when one includes itself.
+    fn include(
+        &mut self,
+        filename: &str,
+        name: &str,
+        parent: usize,
+        arg_counter: &mut usize,
+        epos: TextPos,
+        depth: usize,
+    ) -> Result<(), LoadError> {
+        let here = format!("{}:{}", self.file.display(), epos.line);
+        let including_dir = self
+            .file
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_default();
+        let candidates = [including_dir.join(filename), self.dir.join(filename)];
+        let Some(path) = candidates.iter().find(|p| p.is_file()).cloned() else {
+            return Err(self.err(
+                epos,
+                format!(
+                    "included file \"{filename}\" not found (looked for \"{}\")",
+                    candidates[0].display()
+                ),
+            ));
+        };
+        let canonical = path.canonicalize().unwrap_or_else(|_| path.clone());
+        // The files being read: the scene file, then each include of the chain.
+        let top = &self.files[0];
+        let top = top.canonicalize().unwrap_or_else(|_| top.clone());
+        if canonical == top || self.chain.iter().any(|(c, _)| *c == canonical) {
+            let mut files: Vec<String> = self.chain.iter().map(|(_, from)| from.clone()).collect();
+            files.push(here);
+            files.push(path.display().to_string());
+            return Err(self.err(
+                epos,
+                format!("recursive <include>: {}", files.join(" includes ")),
+            ));
+        }
+        if self.chain.len() + 1 >= MAX_INCLUDE_DEPTH {
+            return Err(self.err(
+                epos,
+                format!("exceeded the maximum include depth of {MAX_INCLUDE_DEPTH}"),
+            ));
+        }
+        let bytes = super::read_regular_file(&path).map_err(|e| {
+            self.err(
+                epos,
+                format!("cannot read included file \"{}\": {e}", path.display()),
+            )
+        })?;
+        let text = String::from_utf8(bytes).map_err(|_| {
+            self.err(
+                epos,
+                format!("included file \"{}\" is not valid UTF-8", path.display()),
+            )
+        })?;
+        let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+        let xml = parse_xml(&path, text)?;
+
+        let file_index = self.files.len() as u32;
+        self.files.push(path.clone());
+        self.chain.push((canonical, here.clone()));
+        let mut sub = Parser {
+            file: &path,
+            file_index,
+            xml: &xml,
+            params: std::mem::take(&mut self.params),
+            nodes: std::mem::take(&mut self.nodes),
+            ids: std::mem::take(&mut self.ids),
+            upgrade_v1: false,
+            files: std::mem::take(&mut self.files),
+            chain: std::mem::take(&mut self.chain),
+            dir: self.dir.clone(),
+            at_included_root: false,
+        };
+        let result = sub.included_root(xml.root_element(), name, parent, arg_counter, depth);
+        self.params = sub.params;
+        self.nodes = sub.nodes;
+        self.ids = sub.ids;
+        self.files = sub.files;
+        self.chain = sub.chain;
+        self.chain.pop();
+        // Mitsuba: "while processing <include>: ..."; here each level of a nested include
+        // appends where it was included from.
+        result.map_err(|mut e| {
+            if !e.message.starts_with("recursive <include>") {
+                e.message = format!("{} (included from {here})", e.message);
+            }
+            e
+        })
+    }
+
+    /// Merges the root of an included file into `parent` (see [`Parser::include`]).
+    fn included_root(
+        &mut self,
+        root: roxmltree::Node<'_, 'x>,
+        name: &str,
+        parent: usize,
+        arg_counter: &mut usize,
+        depth: usize,
+    ) -> Result<(), LoadError> {
+        self.read_version(root)?;
+        if root.tag_name().name() == "scene" {
+            for child in root.children().filter(|c| c.is_element()) {
+                self.element(child, Some(parent), arg_counter, depth + 1)?;
+            }
+            return Ok(());
+        }
+        let before = self.nodes[parent].props.len();
+        self.at_included_root = true;
+        self.element(root, Some(parent), arg_counter, depth + 1)?;
+        self.at_included_root = false;
+        if !name.is_empty() && self.nodes[parent].props.len() == before + 1 {
+            let prop = self.nodes[parent].props.pop().expect("just added");
+            self.add_prop(parent, name, prop.value, prop.pos)?;
+        }
+        Ok(())
+    }
+
     fn pos_at(&self, offset: usize) -> TextPos {
         let p = self.xml.text_pos_at(offset);
         TextPos {
@@ -787,7 +960,12 @@ impl<'a, 'x> Parser<'a, 'x> {
                 epos,
                 "<spectrum> is not supported by radia: use <rgb> or <float>",
             )),
-            "include" | "path" => Err(self.err(epos, format!("<{tag}> is not supported by radia"))),
+            "include" => {
+                self.check_attributes(tag, epos, &attrs, &["!filename", "name"])?;
+                let filename = attr(&attrs, "filename").unwrap_or("");
+                self.include(filename, &name, parent_idx, arg_counter, epos, depth)
+            }
+            "path" => Err(self.err(epos, format!("<{tag}> is not supported by radia"))),
             _ => Err(self.err(epos, format!("unsupported XML element <{tag}>"))),
         }
     }
@@ -1003,7 +1181,14 @@ impl<'a, 'x> Parser<'a, 'x> {
                 return Err(self.err(epos, "nested <scene> elements are not supported"))
             }
             (Some(_), _) => {
-                self.check_attributes(tag, epos, &attrs, &["!type", "id", "name"])?;
+                // The root of an included file carries the file's `version` (parser.cpp's
+                // `is_root`).
+                let spec: &[&str] = if std::mem::take(&mut self.at_included_root) {
+                    &["!version", "!type", "id", "name"]
+                } else {
+                    &["!type", "id", "name"]
+                };
+                self.check_attributes(tag, epos, &attrs, spec)?;
                 attr(&attrs, "type").unwrap_or("").to_string()
             }
         };
@@ -1027,6 +1212,7 @@ impl<'a, 'x> Parser<'a, 'x> {
             kind,
             plugin,
             id,
+            file: self.file_index,
             pos: epos,
             props: Vec::new(),
         };
@@ -1053,13 +1239,14 @@ impl<'a, 'x> Parser<'a, 'x> {
 /// Replaces every `Value::Ref` by the object it names.
 fn resolve_refs(doc: &mut Doc, ids: &HashMap<String, (usize, TextPos)>) -> Result<(), LoadError> {
     for node in &mut doc.nodes {
+        let file = &doc.files[node.file as usize];
         for prop in &mut node.props {
             if let Value::Ref(id) = &prop.value {
                 match ids.get(id) {
                     Some(&(target, _)) => prop.value = Value::Object(target),
                     None => {
                         return Err(LoadError::at(
-                            &doc.file,
+                            file,
                             prop.pos,
                             format!(
                             "unresolved reference to \"{id}\": no object with id=\"{id}\" exists"
@@ -1108,7 +1295,7 @@ fn check_cycles(doc: &Doc) -> Result<(), LoadError> {
                                 .unwrap_or_else(|| doc.nodes[k].describe())
                         };
                         return Err(LoadError::at(
-                            &doc.file,
+                            doc.file_of(&doc.nodes[n]),
                             prop.pos,
                             format!(
                                 "circular reference: {} refers (directly or through nested objects) to its enclosing {}",
