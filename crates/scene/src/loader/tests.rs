@@ -1711,8 +1711,8 @@ fn loader_unsupported_and_unknown() {
         "<medium> objects are not supported",
     );
     expect_err(
-        load("include", r#"<include filename="x.xml"/>"#),
-        "<include> is not supported",
+        load("path", r#"<path value="meshes"/>"#),
+        "<path> is not supported",
     );
     expect_err(
         load(
