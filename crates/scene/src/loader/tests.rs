@@ -2293,6 +2293,8 @@ fn translated_scene_loads_as_the_same_render_space() {
         a.fingerprint(),
         b.fingerprint(),
         "the origin is part of the scene"
+    );
+}
 
 // ---------------------------------------------------------------------------------------
 // <include>
