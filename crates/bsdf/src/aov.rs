@@ -38,6 +38,8 @@ impl Bsdf {
             }
             Bsdf::NormalMap(m) => m.nested.diffuse_reflectance(sp, wi),
             Bsdf::BumpMap(m) => m.nested.diffuse_reflectance(sp, wi),
+            // `mask.cpp`: the nested model's, not scaled by the opacity.
+            Bsdf::Mask(m) => m.nested.diffuse_reflectance(sp, wi),
             other => other.eval(sp, wi, Vec3::Z) * PI,
         }
     }

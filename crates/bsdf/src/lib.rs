@@ -39,6 +39,8 @@
 //! | `twosided` | [`TwoSided`] | `twosided.rs` |
 //! | `normalmap` | [`NormalMap`] | `normal_map.rs` |
 //! | `bumpmap` | [`BumpMap`] | `bump_map.rs` |
+//! | `mask` | [`Mask`] (opacity, cut-outs) | `mask.rs` |
+//! | `null` | [`Null`] (invisible) | `null.rs` |
 //!
 //! Shared pieces: [`microfacet`] (Beckmann and GGX distributions, Smith masking, visible
 //! normal sampling), [`fresnel`] (dielectric, conductor and Schlick Fresnel, reflect and
@@ -59,8 +61,10 @@ mod dielectric;
 mod diffuse;
 pub mod fresnel;
 pub mod ior;
+mod mask;
 pub mod microfacet;
 mod normal_map;
+mod null;
 mod perturbed;
 mod phong;
 mod plastic;
@@ -81,8 +85,10 @@ pub use conductor::Conductor;
 pub use cook_torrance::{CookTorrance, CookTorranceFresnel};
 pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
+pub use mask::Mask;
 pub use microfacet::{MicrofacetDistribution, MicrofacetType};
 pub use normal_map::NormalMap;
+pub use null::Null;
 pub use perturbed::PerturbOptions;
 pub use phong::Phong;
 pub use plastic::Plastic;
@@ -108,15 +114,23 @@ impl LobeFlags {
     pub const GLOSSY_TRANSMISSION: Self = Self(1 << 3);
     pub const DELTA_REFLECTION: Self = Self(1 << 4);
     pub const DELTA_TRANSMISSION: Self = Self(1 << 5);
+    /// Straight through, unchanged (wo = −wi): the transparent part of `mask` and `null`.
+    /// As Mitsuba's `BSDFFlags::Null` (`include/mitsuba/render/bsdf.h`) it counts as a
+    /// delta lobe and as transmission.
+    pub const NULL: Self = Self(1 << 6);
 
     pub const DIFFUSE: Self = Self(Self::DIFFUSE_REFLECTION.0 | Self::DIFFUSE_TRANSMISSION.0);
     pub const GLOSSY: Self = Self(Self::GLOSSY_REFLECTION.0 | Self::GLOSSY_TRANSMISSION.0);
-    pub const DELTA: Self = Self(Self::DELTA_REFLECTION.0 | Self::DELTA_TRANSMISSION.0);
+    pub const DELTA: Self =
+        Self(Self::DELTA_REFLECTION.0 | Self::DELTA_TRANSMISSION.0 | Self::NULL.0);
     pub const SMOOTH: Self = Self(Self::DIFFUSE.0 | Self::GLOSSY.0);
     pub const REFLECTION: Self =
         Self(Self::DIFFUSE_REFLECTION.0 | Self::GLOSSY_REFLECTION.0 | Self::DELTA_REFLECTION.0);
     pub const TRANSMISSION: Self = Self(
-        Self::DIFFUSE_TRANSMISSION.0 | Self::GLOSSY_TRANSMISSION.0 | Self::DELTA_TRANSMISSION.0,
+        Self::DIFFUSE_TRANSMISSION.0
+            | Self::GLOSSY_TRANSMISSION.0
+            | Self::DELTA_TRANSMISSION.0
+            | Self::NULL.0,
     );
 
     #[inline]
@@ -135,6 +149,11 @@ impl LobeFlags {
     #[inline]
     pub const fn is_delta(self) -> bool {
         self.intersects(Self::DELTA)
+    }
+    /// True for a null sample (the path goes on unchanged) or a model with a null lobe.
+    #[inline]
+    pub const fn is_null(self) -> bool {
+        self.intersects(Self::NULL)
     }
 }
 
@@ -207,6 +226,8 @@ pub enum Bsdf {
     TwoSided(TwoSided),
     NormalMap(NormalMap),
     BumpMap(BumpMap),
+    Mask(Mask),
+    Null(Null),
 }
 
 /// Expands to a `match` that calls `$method` on whichever model `$self` holds.
@@ -228,6 +249,8 @@ macro_rules! dispatch {
             Bsdf::TwoSided($m) => $call,
             Bsdf::NormalMap($m) => $call,
             Bsdf::BumpMap($m) => $call,
+            Bsdf::Mask($m) => $call,
+            Bsdf::Null($m) => $call,
         }
     };
 }
@@ -247,7 +270,9 @@ impl Bsdf {
     #[inline(always)]
     pub fn samples_lobe(&self) -> bool {
         match self {
-            Bsdf::Diffuse(_) | Bsdf::Conductor(_) | Bsdf::RoughConductor(_) => false,
+            Bsdf::Diffuse(_) | Bsdf::Conductor(_) | Bsdf::RoughConductor(_) | Bsdf::Null(_) => {
+                false
+            }
             Bsdf::TwoSided(_) | Bsdf::NormalMap(_) | Bsdf::BumpMap(_) => self.nested_samples_lobe(),
             _ => true,
         }
@@ -282,6 +307,26 @@ impl Bsdf {
     #[inline]
     pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
         dispatch!(self, m => m.sample(sp, wi, u1, u2))
+    }
+
+    /// The fraction of light that passes straight through the surface at `sp` (Mitsuba's
+    /// `eval_null_transmission`): 1 − opacity for a `mask`, 1 for `null`, the weighted sum
+    /// for a blend, 0 for every other model. It equals the probability that
+    /// [`Bsdf::sample`] returns a [`LobeFlags::NULL`] sample (each of weight 1), which is
+    /// what lets shadow rays cross such surfaces consistently with BSDF sampling.
+    /// (`twosided` nests no transmissive model and the loader refuses a null lobe under
+    /// `normalmap`/`bumpmap`, so neither needs a case.)
+    #[inline]
+    pub fn null_transmission(&self, sp: &ShadingPoint) -> f32 {
+        match self {
+            Bsdf::Null(_) => 1.0,
+            Bsdf::Mask(m) => m.null_transmission(sp),
+            Bsdf::Blend(m) if m.flags().is_null() => {
+                let w = m.weight_at(sp);
+                m.bsdfs[0].null_transmission(sp) * (1.0 - w) + m.bsdfs[1].null_transmission(sp) * w
+            }
+            _ => 0.0,
+        }
     }
 
     /// eval and pdf together (one call in the NEE hot path).
@@ -371,7 +416,7 @@ mod tests {
         let exponent = log_uniform(rng, 1e-3, 1e5);
         let presets = crate::ior::CONDUCTOR_PRESETS;
         let preset = presets[rng.random_range(0..presets.len())];
-        let n = if depth > 0 { 15 } else { 11 };
+        let n = if depth > 0 { 17 } else { 12 };
         match rng.random_range(0..n) {
             0 => Bsdf::Diffuse(Diffuse::new(random_color(rng))),
             1 => Bsdf::Phong(Phong::new(
@@ -427,7 +472,16 @@ mod tests {
                 Spectrum::ONE,
                 rng.random(),
             )),
-            11 => Bsdf::Blend(Blend::new(
+            11 => Bsdf::Null(Null),
+            15 => Bsdf::Mask(Mask::new(
+                if rng.random() {
+                    Texture::from(rng.random::<f32>() * 1.2 - 0.1)
+                } else {
+                    Checkerboard::new(0.0, 1.0, UvTransform::IDENTITY).into()
+                },
+                random_bsdf(rng, depth - 1),
+            )),
+            16 => Bsdf::Blend(Blend::new(
                 rng.random(),
                 random_bsdf(rng, depth - 1),
                 random_bsdf(rng, depth - 1),

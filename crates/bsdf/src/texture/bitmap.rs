@@ -223,6 +223,11 @@ impl Bitmap {
         self.max
     }
 
+    /// Smallest value of any channel (computed on each call: for load-time decisions).
+    pub fn min_value(&self) -> f32 {
+        self.data.iter().copied().fold(f32::INFINITY, f32::min)
+    }
+
     /// The stored values of texel (x, y), x and y already wrapped.
     #[inline]
     fn texel(&self, x: usize, y: usize) -> &[f32] {

@@ -105,6 +105,16 @@ impl Texture {
         }
     }
 
+    /// The smallest value any channel takes anywhere (a filtered lookup lies between this
+    /// and [`Texture::max_value`]).
+    pub fn min_value(&self) -> f32 {
+        match self {
+            Texture::Constant(c) => c.min_element(),
+            Texture::Bitmap(b) => b.min_value(),
+            Texture::Checkerboard(c) => c.color0.min_value().min(c.color1.min_value()),
+        }
+    }
+
     /// True when the texture has the same value everywhere (Mitsuba's
     /// `!is_spatially_varying()`).
     pub fn is_constant(&self) -> bool {
