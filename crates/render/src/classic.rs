@@ -27,6 +27,8 @@
 //! * Surfaces whose BSDF has only delta lobes (`conductor`, `dielectric`,
 //!   `thindielectric`) are traced Whitted-style: every delta lobe is followed, weighted by
 //!   its probability and weight (Fresnel for a dielectric), to `max_depth` segments.
+//! * A `mask` is shaded with its opacity-weighted nested BSDF, plus what lies behind it
+//!   times its transparency; shadow rays pass through cut-outs (`Scene::transmittance`).
 //! * `shading` on triangle meshes: `phong` evaluates at every hit with the interpolated
 //!   normal; `gouraud` evaluates at the triangle's three vertices (their normals, the view
 //!   from each vertex) and interpolates the colours barycentrically; `flat` evaluates once
@@ -110,6 +112,12 @@ impl<'a> ClassicIntegrator<'a> {
             return result;
         }
         result += self.shade(scene, &si, ray.o, depth, sampler, stats);
+        // ---- A `mask`'s transparent part: what lies behind, seen straight through ----
+        let through = bsdf.null_transmission(&si.shading_point());
+        if through > 0.0 && depth + 1 < self.max_depth {
+            let behind = self.trace(scene, si.spawn_ray(ray.d), depth + 1, sampler, stats);
+            result += behind * through;
+        }
         result
     }
 
@@ -209,9 +217,12 @@ impl<'a> ClassicIntegrator<'a> {
             if self.desc.shadows {
                 let shadow = si.shadow_ray(&es);
                 stats.rays += 1;
-                if scene.occluded(&shadow) {
+                // Through cut-outs (`mask`, `null`), as the path tracer's shadow rays.
+                let transmittance = scene.transmittance(&shadow, u32::MAX);
+                if transmittance == 0.0 {
                     continue;
                 }
+                e *= transmittance;
             }
             result += f * e;
         }

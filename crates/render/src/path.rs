@@ -1,6 +1,16 @@
 //! Unidirectional path tracing with next-event estimation and multiple importance sampling,
 //! following Mitsuba 3's `src/integrators/path.cpp` so that `max_depth`, `rr_depth`,
 //! `hide_emitters` and Russian roulette mean exactly what they mean there.
+//!
+//! Surfaces with a null lobe (`mask`, `null`: see `crates/bsdf/src/mask.rs` for what Mitsuba
+//! does with them and where radia differs): a null sample continues the ray unchanged and
+//! counts as a bounce (depth and Russian roulette, as `path.cpp`), but is not a scattering
+//! vertex: [`PrevVertex`] stays at the vertex before it, whose next-event estimation sees
+//! through such surfaces ([`Scene::transmittance`]), so that an emitter found behind them
+//! is weighted against that estimation. A camera ray that crossed only null surfaces is
+//! still a camera ray for `hide_emitters` (area emitters and the environment stay hidden
+//! through holes; Mitsuba 3.9.1 hides the environment there but shows area emitters, as its
+//! `skip_area_emitters` runs only before the first intersection).
 
 use glam::Vec3;
 use radia_bsdf::ShadingPoint;
@@ -50,7 +60,8 @@ pub struct PathIntegrator {
     has_lights: bool,
 }
 
-/// Where the previous bounce left from, for MIS on emitters hit by BSDF sampling.
+/// Where the previous bounce left from, for MIS on emitters hit by BSDF sampling (null
+/// crossings are not bounces here).
 #[derive(Clone, Copy)]
 struct PrevVertex {
     p: Vec3,
@@ -88,6 +99,8 @@ impl PathIntegrator {
         let mut beta = Spectrum::ONE;
         let mut eta = 1.0f32;
         let mut depth = 0u32;
+        // The ray is the camera's, or continues it through null surfaces only.
+        let mut primary = true;
         // A camera ray counts as "delta" so that emitters it sees directly get full weight.
         let mut prev = PrevVertex {
             p: ray.o,
@@ -102,14 +115,14 @@ impl PathIntegrator {
         loop {
             stats.rays += 1;
             let mut hit = scene.intersect(&ray);
-            if self.hide_emitters && depth == 0 {
+            if self.hide_emitters && primary {
                 hit = skip_area_emitters(scene, &mut ray, hit, stats);
             }
             let Some(si) = hit else {
                 // ---- Escaped: environment emission (none without an environment) ----
                 // With hide_emitters an escaped camera ray gives 0 (path.cpp's `valid_ray`).
                 if let Some(env) = scene.environment {
-                    if !(self.hide_emitters && depth == 0) {
+                    if !(self.hide_emitters && primary) {
                         let emitter = &scene.emitters[env as usize];
                         let le = emitter.eval_environment(ray.d);
                         let w = self.mis_emitter_hit(scene, env, None, ray.d, &prev);
@@ -139,7 +152,10 @@ impl PathIntegrator {
             // ---- Emitter sampling (next-event estimation) ----
             if bsdf.flags().has_smooth() && self.has_lights {
                 sampler.seek(layout::bounce(depth) + layout::LIGHT_POSITION);
-                result += beta * self.sample_emitter(scene, &si, &sp, bsdf, sampler, stats);
+                // Shadow rays may cross null surfaces, each a bounce (see the module docs).
+                let crossings = self.max_depth.saturating_sub(depth + 2);
+                result +=
+                    beta * self.sample_emitter(scene, &si, &sp, bsdf, crossings, sampler, stats);
             }
 
             // ---- BSDF sampling ----
@@ -158,16 +174,22 @@ impl PathIntegrator {
             if bs.weight == Spectrum::ZERO {
                 break;
             }
-            let d = si.frame.to_world(bs.wo);
             beta *= bs.weight;
             eta *= bs.eta;
-            prev = PrevVertex {
-                p: si.p,
-                n: si.frame.n,
-                bsdf_pdf: bs.pdf,
-                bsdf_delta: bs.lobe.is_delta(),
-            };
-            ray = si.spawn_ray(d);
+            if bs.lobe.is_null() {
+                // Straight on (exactly along the ray, not −wi through the frames); `prev`
+                // stays where the path last scattered.
+                ray = si.spawn_ray(ray.d);
+            } else {
+                primary = false;
+                prev = PrevVertex {
+                    p: si.p,
+                    n: si.frame.n,
+                    bsdf_pdf: bs.pdf,
+                    bsdf_delta: bs.lobe.is_delta(),
+                };
+                ray = si.spawn_ray(si.frame.to_world(bs.wo));
+            }
 
             // ---- Russian roulette (path.cpp: q = min(max(β)·η², 0.95)) ----
             depth += 1;
@@ -209,15 +231,18 @@ impl PathIntegrator {
         power_heuristic(prev.bsdf_pdf, pdf_em)
     }
 
-    /// One next-event estimation sample: L·f·cos / pdf with the MIS weight, unoccluded or 0.
+    /// One next-event estimation sample: L·f·cos / pdf with the MIS weight, times the
+    /// shadow ray's transmittance (through at most `crossings` null surfaces).
     /// Delta lights need no MIS (BSDF sampling never finds them), so no BSDF pdf either.
     #[inline]
+    #[allow(clippy::too_many_arguments)]
     fn sample_emitter<S: Sampler>(
         &self,
         scene: &Scene,
         si: &SurfaceInteraction,
         sp: &ShadingPoint,
         bsdf: &radia_bsdf::Bsdf,
+        crossings: u32,
         sampler: &mut SampleStream<'_, S>,
         stats: &mut PathStats,
     ) -> Spectrum {
@@ -246,10 +271,11 @@ impl PathIntegrator {
         }
         let shadow = si.shadow_ray(&es);
         stats.rays += 1;
-        if scene.occluded(&shadow) {
+        let transmittance = scene.transmittance(&shadow, crossings);
+        if transmittance == 0.0 {
             return Spectrum::ZERO;
         }
-        f * es.radiance * (w / es.pdf)
+        f * es.radiance * (w * transmittance / es.pdf)
     }
 }
 

@@ -19,9 +19,9 @@ use radia_bsdf::ior::{
 use radia_bsdf::microfacet::{RoughnessTextures, Shadowing};
 use radia_bsdf::{
     Blend, BlinnPhong, Bsdf, BumpMap, Conductor, CookTorrance, CookTorranceFresnel, Dielectric,
-    Diffuse, LobeFlags, MicrofacetDistribution, MicrofacetType, NormalMap, PerturbOptions, Phong,
-    Plastic, RoughConductor, RoughDielectric, RoughPlastic, ShadingPoint, Texture, ThinDielectric,
-    TwoSided,
+    Diffuse, LobeFlags, Mask, MicrofacetDistribution, MicrofacetType, NormalMap, Null,
+    PerturbOptions, Phong, Plastic, RoughConductor, RoughDielectric, RoughPlastic, ShadingPoint,
+    Texture, ThinDielectric, TwoSided,
 };
 
 /// Nested BSDFs (twosided of twosided ...) deeper than this are refused.
@@ -29,7 +29,7 @@ const MAX_NESTING: usize = 32;
 
 /// The plugin names [`build_bsdf`] knows, for the error message.
 const SUPPORTED: &str = "diffuse, conductor, roughconductor, dielectric, thindielectric, \
-roughdielectric, plastic, roughplastic, blendbsdf, twosided, normalmap, bumpmap, and radia's \
+roughdielectric, plastic, roughplastic, blendbsdf, twosided, normalmap, bumpmap, mask, null, and radia's \
 phong, blinnphong, cooktorrance";
 
 /// Builds the BSDF of node `idx`. A node referenced several times is built once.
@@ -60,6 +60,11 @@ pub(crate) fn build_bsdf(
         "twosided" => twosided(b, p, nesting)?,
         "normalmap" => normal_map(b, p, nesting)?,
         "bumpmap" => bump_map(b, p, nesting)?,
+        "mask" => mask(b, p, nesting)?,
+        "null" => {
+            p.finish()?;
+            Bsdf::Null(Null)
+        }
         "phong" => phong(b, p, false)?,
         "blinnphong" => phong(b, p, true)?,
         "cooktorrance" => cook_torrance(b, p)?,
@@ -574,11 +579,18 @@ fn perturbing(
             format!("{plugin}: only a single BSDF child object can be specified"),
         ));
     }
-    let Some((nested_bsdf, _)) = bsdfs.pop() else {
+    let Some((nested_bsdf, pos)) = bsdfs.pop() else {
         return Err(p.err(format!(
             "{plugin}: exactly one BSDF child object must be specified"
         )));
     };
+    if nested_bsdf.flags().is_null() {
+        // (Its shadow rays would need the null transmission in the perturbed frame.)
+        return Err(p.err_at(
+            pos,
+            format!("{plugin}: a mask or null BSDF cannot be nested in it (nest the {plugin} in the mask instead)"),
+        ));
+    }
     let options = PerturbOptions {
         flip_invalid_normals: p.boolean("flip_invalid_normals", true)?,
         use_shadowing_function: p.boolean("use_shadowing_function", true)?,
@@ -641,6 +653,21 @@ fn bump_map(b: &mut Builder<'_>, mut p: Props<'_>, nesting: usize) -> Result<Bsd
         nested_bsdf,
         options,
     )))
+}
+
+/// `mask` (`src/bsdfs/mask.cpp`): `opacity` (float, colour or texture, default 0.5; its
+/// `eval_1`, clamped to [0, 1]) and exactly one nested BSDF.
+fn mask(b: &mut Builder<'_>, mut p: Props<'_>, nesting: usize) -> Result<Bsdf, LoadError> {
+    let mut bsdfs = nested(b, &mut p, nesting, "mask")?;
+    if bsdfs.len() > 1 {
+        return Err(p.err_at(bsdfs[1].1, "mask: cannot specify more than one child BSDF"));
+    }
+    let Some((nested_bsdf, _)) = bsdfs.pop() else {
+        return Err(p.err("mask: a child BSDF must be specified"));
+    };
+    let opacity = texture_param(b, &mut p, "opacity", 0.5, false)?;
+    p.finish()?;
+    Ok(Bsdf::Mask(Mask::new(opacity, nested_bsdf)))
 }
 
 #[cfg(test)]
@@ -927,6 +954,62 @@ mod tests {
         load_err(
             r#"<bsdf type="velvet"/>"#,
             "unsupported BSDF plugin type \"velvet\"",
+        );
+    }
+
+    #[test]
+    fn loader_bsdfs_mask_and_null() {
+        let sp = ShadingPoint::at_uv(Vec2::new(0.25, 0.25));
+        // The default opacity is 0.5.
+        let b = bsdf(r#"<bsdf type="mask"><bsdf type="diffuse"/></bsdf>"#);
+        let Bsdf::Mask(m) = &b else { panic!("{b:?}") };
+        assert!(matches!(*m.nested, Bsdf::Diffuse(_)));
+        assert_eq!(b.null_transmission(&sp), 0.5);
+        let b = bsdf(
+            r#"<bsdf type="mask"><float name="opacity" value="0.2"/><bsdf type="twosided"><bsdf type="diffuse"/></bsdf></bsdf>"#,
+        );
+        assert!((b.null_transmission(&sp) - 0.8).abs() < 1e-6);
+        // Values out of [0, 1] are clamped.
+        let b = bsdf(
+            r#"<bsdf type="mask"><float name="opacity" value="1.5"/><bsdf type="diffuse"/></bsdf>"#,
+        );
+        assert_eq!(b.null_transmission(&sp), 0.0);
+        // A texture (a checkerboard's scalar lookup has color0 where the parities of 2u and
+        // 2v differ, as Mitsuba's `eval_1`).
+        let b = bsdf(
+            r#"<bsdf type="mask"><texture type="checkerboard" name="opacity"><float name="color0" value="1"/><float name="color1" value="0"/></texture><bsdf type="diffuse"/></bsdf>"#,
+        );
+        assert_eq!(b.null_transmission(&sp), 1.0);
+        assert_eq!(
+            b.null_transmission(&ShadingPoint::at_uv(Vec2::new(0.75, 0.25))),
+            0.0
+        );
+        assert!(matches!(bsdf(r#"<bsdf type="null"/>"#), Bsdf::Null(_)));
+        load_err(
+            r#"<bsdf type="mask"/>"#,
+            "mask: a child BSDF must be specified",
+        );
+        load_err(
+            r#"<bsdf type="mask"><bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf>"#,
+            "more than one child BSDF",
+        );
+        load_err(
+            r#"<bsdf type="mask"><float name="opacities" value="1"/><bsdf type="diffuse"/></bsdf>"#,
+            "opacities",
+        );
+        load_err(
+            r#"<bsdf type="null"><float name="opacity" value="1"/></bsdf>"#,
+            "opacity",
+        );
+        // twosided refuses transmission, null included, as Mitsuba's; normalmap refuses a
+        // null lobe (radia).
+        load_err(
+            r#"<bsdf type="twosided"><bsdf type="mask"><bsdf type="diffuse"/></bsdf></bsdf>"#,
+            "without a transmission component",
+        );
+        load_err(
+            r#"<bsdf type="normalmap"><rgb name="normalmap" value="0.5, 0.5, 1"/><bsdf type="null"/></bsdf>"#,
+            "cannot be nested",
         );
     }
 }
