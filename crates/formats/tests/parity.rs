@@ -240,3 +240,141 @@ fn scene_files_render_as_their_xml_twins() {
     println!("textured with a bilinear checker: worst block {block:.4}, mean {mean:.5}");
     assert!(block > 0.03, "a bilinear checker went unnoticed: {block}");
 }
+
+/// glTF's `alphaMode: MASK` with a `baseColorTexture` cuts out per texel (§3.9.4: alpha ×
+/// factor ≥ `alphaCutoff` is opaque, else transparent): a double-sided panel whose texture
+/// alpha is a 4 × 4 checker, in front of a floor, lit from behind by a point light, renders
+/// as its XML twin with a `mask` BSDF whose opacity is the same checker (holes seen through,
+/// and light through the holes onto the floor). The opaque panel differs.
+#[test]
+fn alpha_mask_texture_cuts_out_per_texel_as_a_mask_bsdf() {
+    let dir = test_dir("alpha-mask");
+    let panel_p = [
+        [-0.8, 0.1, 0.5],
+        [0.8, 0.1, 0.5],
+        [0.8, 1.3, 0.5],
+        [-0.8, 1.3, 0.5],
+    ];
+    let panel_n = [[0.0, 0.0, 1.0]; 4];
+    let floor_p = [
+        [-3.0, 0.0, 3.0],
+        [3.0, 0.0, 3.0],
+        [3.0, 0.0, -3.0],
+        [-3.0, 0.0, -3.0],
+    ];
+    let floor_n = [[0.0, 1.0, 0.0]; 4];
+    let uv = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+    // Colour (200, 150, 100) everywhere; alpha 255 and 0 (× factor 0.9: 0.9 and 0 against
+    // the cutoff 0.6) in a checker, texel (0, 0) opaque.
+    let mut rgba = Vec::new();
+    let mut grey = Vec::new();
+    for y in 0..4 {
+        for x in 0..4 {
+            let a = if (x + y) % 2 == 0 { 255 } else { 0 };
+            rgba.extend([200u8, 150, 100, a]);
+            grey.push(a);
+        }
+    }
+    std::fs::write(
+        dir.join("colour.png"),
+        png(4, 4, 3, &[[200u8, 150, 100]; 16].concat()),
+    )
+    .unwrap();
+    std::fs::write(dir.join("alpha.png"), png(4, 4, 1, &grey)).unwrap();
+    std::fs::write(
+        dir.join("panel.obj"),
+        obj(&panel_p, &panel_n, &uv, &QUAD_INDICES),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("floor.obj"),
+        obj(&floor_p, &floor_n, &uv, &QUAD_INDICES),
+    )
+    .unwrap();
+
+    let mut b = GltfBuilder::new();
+    let image = b.image(&png(4, 4, 4, &rgba), "image/png");
+    let texture = b.texture(image, NEAREST, REPEAT, REPEAT);
+    b.push(
+        "materials",
+        json!({ "pbrMetallicRoughness": { "baseColorFactor": [0.6, 0.6, 0.6, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8 } }),
+    );
+    b.push(
+        "materials",
+        json!({ "alphaMode": "MASK", "alphaCutoff": 0.6, "doubleSided": true,
+                "pbrMetallicRoughness": { "baseColorTexture": { "index": texture },
+                    "baseColorFactor": [1.0, 1.0, 1.0, 0.9], "metallicFactor": 0.0, "roughnessFactor": 0.5 } }),
+    );
+    let floor = b.mesh_with_uv(&floor_p, &floor_n, &uv, &QUAD_INDICES, 0);
+    let panel = b.mesh_with_uv(&panel_p, &panel_n, &uv, &QUAD_INDICES, 1);
+    b.push("nodes", json!({ "mesh": floor }));
+    b.push("nodes", json!({ "mesh": panel }));
+    b.push(
+        "cameras",
+        json!({ "type": "perspective", "perspective": { "yfov": YFOV, "znear": 0.01, "zfar": 100.0 } }),
+    );
+    let cam = looking_at(EYE, TARGET, Vec3::Y);
+    b.push("nodes", json!({ "camera": 0, "matrix": cam }));
+    b.use_extension("KHR_lights_punctual", false);
+    b.json["extensions"] =
+        json!({ "KHR_lights_punctual": { "lights": [{ "type": "point", "intensity": 15.0 }] } });
+    b.push(
+        "nodes",
+        json!({ "translation": [0.3, 2.0, -1.5], "extensions": { "KHR_lights_punctual": { "light": 0 } } }),
+    );
+    b.scene(&[0, 1, 2, 3]);
+    let glb = b.write(&dir, "alpha-mask", Container::Glb);
+
+    let fov_x = 2.0 * ((YFOV * 0.5).tan() * W as f32 / H as f32).atan();
+    let xml = |masked: bool| {
+        let panel = r#"<bsdf type="twosided"><bsdf type="cooktorrance">
+                <texture type="bitmap" name="base_color"><string name="filename" value="colour.png"/>
+                    <string name="filter_type" value="nearest"/></texture>
+                <float name="metallic" value="0"/><float name="roughness" value="0.5"/></bsdf></bsdf>"#;
+        let panel = if masked {
+            format!(
+                r#"<bsdf type="mask"><texture type="bitmap" name="opacity"><string name="filename" value="alpha.png"/>
+                    <boolean name="raw" value="true"/><string name="filter_type" value="nearest"/></texture>{panel}</bsdf>"#
+            )
+        } else {
+            panel.to_string()
+        };
+        let text = format!(
+            r#"<scene version="3.0.0">
+    <sensor type="perspective">
+        <float name="fov" value="{fov}"/>
+        <float name="near_clip" value="0.01"/>
+        <float name="far_clip" value="100"/>
+        <transform name="to_world"><lookat origin="{e}" target="{t}" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="{W}"/><integer name="height" value="{H}"/><rfilter type="box"/></film>
+    </sensor>
+    <shape type="obj"><string name="filename" value="floor.obj"/><boolean name="flip_tex_coords" value="false"/>
+        <bsdf type="cooktorrance"><rgb name="base_color" value="0.6"/><float name="metallic" value="0"/><float name="roughness" value="0.8"/></bsdf></shape>
+    <shape type="obj"><string name="filename" value="panel.obj"/><boolean name="flip_tex_coords" value="false"/>
+        {panel}</shape>
+    <emitter type="point"><point name="position" x="0.3" y="2" z="-1.5"/><rgb name="intensity" value="15"/></emitter>
+</scene>"#,
+            fov = fov_x.to_degrees(),
+            e = format!("{}, {}, {}", EYE.x, EYE.y, EYE.z),
+            t = format!("{}, {}, {}", TARGET.x, TARGET.y, TARGET.z),
+        );
+        let path = dir.join(format!("alpha-mask-{masked}.xml"));
+        std::fs::write(&path, text).unwrap();
+        render_file(&path)
+    };
+    let gltf = render_file(&glb);
+    let twin = xml(true);
+    assert!(gltf.iter().chain(&twin).all(|p| p.is_finite()));
+    let lit = twin.iter().filter(|p| p.max_element() > 0.0).count();
+    assert!(lit > (W * H / 3) as usize, "mostly dark: {lit} lit pixels");
+    let (block, mean) = differences(&gltf, &twin, (W, H));
+    println!("alpha MASK glTF vs XML mask: worst 8x8 block {block:.4}, image mean {mean:.5}");
+    assert!(
+        block < 0.03 && mean < 0.005,
+        "worst block {block}, mean {mean}"
+    );
+    let opaque = xml(false);
+    let (block, mean) = differences(&gltf, &opaque, (W, H));
+    println!("alpha MASK glTF vs the opaque panel: worst block {block:.4}, mean {mean:.5}");
+    assert!(block > 0.1, "the cut-outs went unnoticed: {block}");
+}

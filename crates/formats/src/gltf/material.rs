@@ -12,7 +12,7 @@
 //! | `doubleSided: true` | `twosided` around it: back faces are shaded as front faces with the normal reversed (§3.9.5) |
 //! | `doubleSided: false` | the one-sided BSDF: back faces are black and opaque |
 //! | `alphaMode` OPAQUE | opaque |
-//! | `alphaMode` MASK | with factors only, a primitive whose `baseColorFactor` alpha is below `alphaCutoff` (default 0.5) is fully cut out (not rendered); a texture's alpha is not read (one warning): opaque |
+//! | `alphaMode` MASK | the alpha value, `baseColorFactor`'s alpha × the `baseColorTexture`'s (linear, filtered as the colour is), is compared to `alphaCutoff` (default 0.5) at every hit (§3.9.4): opaque where ≥, fully transparent below, through a `mask` adapter with that cutoff ([`radia_bsdf::Mask::with_cutoff`]; shadow rays pass through the holes). Without a texture, or with one whose every texel is on one side, the whole primitive is opaque or not rendered |
 //! | `alphaMode` BLEND | rendered opaque, with a warning |
 //! | no material | the specification's default material: base colour 1, metallic 1, roughness 1, single-sided |
 //!
@@ -35,11 +35,12 @@
 //!   normal-mapped primitive without uv (no MikkTSpace possible) falls back to it with a
 //!   warning.
 //! - **Back faces of single-sided materials.** A rasteriser culls them (§3.9.5): they are
-//!   invisible. radia has no pass-through surface yet (Mitsuba's `null`/`mask`, issue #10),
-//!   so they are black and opaque, like Mitsuba's one-sided BSDFs. A closed mesh, the usual
-//!   case for single-sided materials, renders the same either way.
-//! - **MASK with a textured alpha** would need an any-hit test in the triangle kernels; it
-//!   is opaque (a warning says so).
+//!   invisible. radia shades them black and opaque, like Mitsuba's one-sided BSDFs (making
+//!   them invisible would take a `null` back side on every single-sided material). A closed
+//!   mesh, the usual case for single-sided materials, renders the same either way.
+//! - **MASK** has no vertex-colour alpha (radia reads no `COLOR_0`); the alpha of a
+//!   `baseColorTexture` is bilinearly filtered before the comparison unless its sampler
+//!   says NEAREST, as a GPU's would be.
 //! - **Emission is one-sided**: radia's area emitters, like Mitsuba's, emit from the front
 //!   face only, also on double-sided materials.
 //! - **Occlusion textures** are ignored on purpose: a path tracer computes the occlusion
@@ -48,8 +49,8 @@
 use super::textures::{Channels, Images};
 use radia_bsdf::microfacet::Shadowing;
 use radia_bsdf::{
-    Bsdf, CookTorrance, CookTorranceFresnel, MicrofacetDistribution, MicrofacetType, NormalMap,
-    PerturbOptions, Texture, TwoSided,
+    Bsdf, CookTorrance, CookTorranceFresnel, Mask, MicrofacetDistribution, MicrofacetType,
+    NormalMap, PerturbOptions, Texture, TwoSided,
 };
 use radia_math::Spectrum;
 use std::collections::HashMap;
@@ -223,15 +224,30 @@ fn build(
         })
     };
 
+    let mut bsdf = bsdf;
     let cut_out = match m.alpha_mode() {
         gltf::material::AlphaMode::Opaque => false,
         gltf::material::AlphaMode::Mask => {
-            if pbr.base_color_texture().is_some() {
-                warn(format!(
-                    "{name}: alphaMode MASK with a baseColorTexture: the texture's alpha is not read (cut-outs per texel need an any-hit test radia does not have), the factor's alpha alone decides"
-                ));
+            let cutoff = m.alpha_cutoff().unwrap_or(0.5);
+            match pbr.base_color_texture() {
+                None => a < cutoff,
+                Some(t) => {
+                    let alpha = images
+                        .texture(&t.texture(), Channels::Linear(3, a))
+                        .map_err(fail)?;
+                    // (A filtered value lies between texel values: all on one side, one
+                    // answer everywhere.)
+                    let (lo, hi) = (alpha.min_value(), alpha.max_value());
+                    if hi < cutoff {
+                        true
+                    } else {
+                        if lo < cutoff {
+                            bsdf = Bsdf::Mask(Mask::with_cutoff(alpha, cutoff, bsdf));
+                        }
+                        false
+                    }
+                }
             }
-            a < m.alpha_cutoff().unwrap_or(0.5)
         }
         gltf::material::AlphaMode::Blend => {
             warn(format!(
