@@ -158,7 +158,7 @@ impl Scene {
         while let Some(si) = self.intersect(&r) {
             let tr = self.bsdf(&si).null_transmission(&si.shading_point());
             crossings += 1;
-            if !(tr > 0.0) || crossings > max_crossings {
+            if tr.is_nan() || tr <= 0.0 || crossings > max_crossings {
                 return 0.0;
             }
             t *= tr;
@@ -166,7 +166,7 @@ impl Scene {
             let next = si.spawn_ray(r.d);
             let travelled = (next.o - r.o).dot(r.d);
             r = Ray::new(next.o, r.d, r.t_max - travelled);
-            if !(r.t_max > 0.0) {
+            if r.t_max.is_nan() || r.t_max <= 0.0 {
                 break;
             }
         }
