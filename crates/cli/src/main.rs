@@ -333,11 +333,16 @@ fn run_render(command: Command) -> Result<ExitCode, String> {
         }
     }
     // What the parts of a split render must agree on (the film overrides are in `desc`).
+    // Reading the files into the typed description, then (after its fingerprint) the
+    // acceleration structures: the BVH over the primitives and the light sampler's tree.
+    let read_secs = t_load.elapsed().as_secs_f64();
     let fingerprint = desc.fingerprint();
+    let t_build = Instant::now();
     let mut scene = Scene::build(desc);
     if let Some(kind) = light_sampler {
         scene.set_light_sampler(kind);
     }
+    let build_secs = t_build.elapsed().as_secs_f64();
     let load_secs = t_load.elapsed().as_secs_f64();
     let sampler = sampler.unwrap_or(scene.sampler.kind);
     // A time budget without --spp renders as many samples as the time allows.
@@ -361,9 +366,11 @@ fn run_render(command: Command) -> Result<ExitCode, String> {
     }
     let (w, h) = (scene.film.width, scene.film.height);
     eprintln!(
-        "radia: loaded {} in {:.3} s: {} primitives, {} emitters, {}x{} at {} spp ({} sampler)",
+        "radia: loaded {} in {:.3} s (read {:.3} s, BVH and light tree {:.3} s): {} primitives, {} emitters, {}x{} at {} spp ({} sampler)",
         scene_path.display(),
         load_secs,
+        read_secs,
+        build_secs,
         scene.primitive_count(),
         scene.emitters.len(),
         w,
