@@ -35,6 +35,7 @@
 //! | `roughdielectric` | [`RoughDielectric`] | `rough_dielectric.rs` |
 //! | `plastic` | [`Plastic`] | `plastic.rs` |
 //! | `roughplastic` | [`RoughPlastic`] | `rough_plastic.rs` |
+//! | `principled` | [`Principled`] (Disney, Blender's Principled BSDF) | `principled.rs` |
 //! | `blendbsdf` | [`Blend`] | `blend.rs` |
 //! | `twosided` | [`TwoSided`] | `twosided.rs` |
 //! | `normalmap` | [`NormalMap`] | `normal_map.rs` |
@@ -46,7 +47,8 @@
 //! normal sampling), [`fresnel`] (dielectric, conductor and Schlick Fresnel, reflect and
 //! refract), [`ior`] (Mitsuba's named indices of refraction and conductor presets),
 //! `perturbed.rs` (the shading-frame change `normalmap` and `bumpmap` share), [`Texture`]
-//! (`texture/`: constants, bitmaps, checkerboards).
+//! (`texture/`: constants, bitmaps, checkerboards), `principled_helpers.rs` (what
+//! `principled` and `principledthin` share, Mitsuba's `principledhelpers.h`).
 
 use glam::{Vec2, Vec3};
 use radia_math::Spectrum;
@@ -68,6 +70,8 @@ mod null;
 mod perturbed;
 mod phong;
 mod plastic;
+mod principled;
+mod principled_helpers;
 mod rough_conductor;
 mod rough_dielectric;
 mod rough_plastic;
@@ -92,6 +96,7 @@ pub use null::Null;
 pub use perturbed::PerturbOptions;
 pub use phong::Phong;
 pub use plastic::Plastic;
+pub use principled::{Principled, PrincipledIor};
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
 pub use rough_plastic::RoughPlastic;
@@ -222,6 +227,7 @@ pub enum Bsdf {
     RoughDielectric(RoughDielectric),
     Plastic(Plastic),
     RoughPlastic(RoughPlastic),
+    Principled(Principled),
     Blend(Blend),
     TwoSided(TwoSided),
     NormalMap(NormalMap),
@@ -245,6 +251,7 @@ macro_rules! dispatch {
             Bsdf::RoughDielectric($m) => $call,
             Bsdf::Plastic($m) => $call,
             Bsdf::RoughPlastic($m) => $call,
+            Bsdf::Principled($m) => $call,
             Bsdf::Blend($m) => $call,
             Bsdf::TwoSided($m) => $call,
             Bsdf::NormalMap($m) => $call,
