@@ -128,6 +128,8 @@ CASES = [
     ("alpha-negative.xml", "alpha-negative.xml:10:13", scene(shape_with_bsdf('        <bsdf type="roughconductor">\n            <float name="alpha" value="-0.3"/>\n        </bsdf>\n'))),
     ("alpha-nan.xml", "alpha-nan.xml:10:13", scene(shape_with_bsdf('        <bsdf type="roughdielectric">\n            <float name="alpha" value="nan"/>\n        </bsdf>\n'))),
     ("alpha-v-negative.xml", "alpha-v-negative.xml:11:13", scene(shape_with_bsdf('        <bsdf type="roughconductor">\n            <float name="alpha_u" value="0.1"/>\n            <float name="alpha_v" value="-1"/>\n        </bsdf>\n'))),
+    ("principled-eta-and-specular.xml", "principled-eta-and-specular.xml:9:9", scene(shape_with_bsdf('        <bsdf type="principled">\n            <float name="eta" value="1.5"/>\n            <float name="specular" value="0.5"/>\n        </bsdf>\n'))),
+    ("principled-metallic-above-one.xml", "principled-metallic-above-one.xml:10:13", scene(shape_with_bsdf('        <bsdf type="principled">\n            <float name="metallic" value="1.5"/>\n        </bsdf>\n'))),
     ("ior-negative.xml", "ior-negative.xml:9:9", scene(shape_with_bsdf('        <bsdf type="dielectric">\n            <float name="int_ior" value="-1.5"/>\n        </bsdf>\n'))),
     ("ior-nan.xml", "ior-nan.xml:", scene(shape_with_bsdf('        <bsdf type="plastic">\n            <float name="int_ior" value="nan"/>\n        </bsdf>\n'))),
     ("reflectance-nan.xml", "reflectance-nan.xml:10:13", scene(shape_with_bsdf('        <bsdf type="diffuse">\n            <float name="reflectance" value="nan"/>\n        </bsdf>\n'))),

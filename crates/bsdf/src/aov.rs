@@ -11,7 +11,8 @@ impl Bsdf {
     ///
     /// * `diffuse`: its reflectance (`src/bsdfs/diffuse.cpp`); `plastic`, `roughplastic`:
     ///   their `diffuse_reflectance` (`plastic.cpp`, `roughplastic.cpp`). radia's own `phong`
-    ///   and `blinnphong` follow plastic: their diffuse reflectance `kd`.
+    ///   and `blinnphong` follow plastic: their diffuse reflectance `kd`. `principled`,
+    ///   `principledthin`: their `base_color` (`principled.cpp`, `principledthin.cpp`).
     /// * `blendbsdf`: (1 − w)·first + w·second; `twosided`: the side `wi` is on, queried from
     ///   the front (`twosided.cpp`); `normalmap`, `bumpmap`: the nested BSDF at the
     ///   unperturbed point (`normalmap.cpp`, `bumpmap.cpp`).
@@ -24,6 +25,9 @@ impl Bsdf {
             Bsdf::RoughPlastic(m) => m.diffuse_reflectance.eval(sp),
             Bsdf::Phong(m) => m.diffuse_reflectance.eval(sp),
             Bsdf::BlinnPhong(m) => m.diffuse_reflectance.eval(sp),
+            // `principled.cpp`: its base colour.
+            Bsdf::Principled(m) => m.base_color.eval(sp),
+            Bsdf::PrincipledThin(m) => m.base_color.eval(sp),
             Bsdf::Blend(m) => {
                 let w = m.weight_at(sp);
                 m.bsdfs[0].diffuse_reflectance(sp, wi) * (1.0 - w)

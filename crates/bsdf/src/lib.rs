@@ -36,6 +36,7 @@
 //! | `plastic` | [`Plastic`] | `plastic.rs` |
 //! | `roughplastic` | [`RoughPlastic`] | `rough_plastic.rs` |
 //! | `principled` | [`Principled`] (Disney, Blender's Principled BSDF) | `principled.rs` |
+//! | `principledthin` | [`PrincipledThin`] (a sheet: both sides alike, no bending) | `principled_thin.rs` |
 //! | `blendbsdf` | [`Blend`] | `blend.rs` |
 //! | `twosided` | [`TwoSided`] | `twosided.rs` |
 //! | `normalmap` | [`NormalMap`] | `normal_map.rs` |
@@ -72,6 +73,7 @@ mod phong;
 mod plastic;
 mod principled;
 mod principled_helpers;
+mod principled_thin;
 mod rough_conductor;
 mod rough_dielectric;
 mod rough_plastic;
@@ -97,6 +99,7 @@ pub use perturbed::PerturbOptions;
 pub use phong::Phong;
 pub use plastic::Plastic;
 pub use principled::{Principled, PrincipledIor};
+pub use principled_thin::PrincipledThin;
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
 pub use rough_plastic::RoughPlastic;
@@ -228,6 +231,7 @@ pub enum Bsdf {
     Plastic(Plastic),
     RoughPlastic(RoughPlastic),
     Principled(Principled),
+    PrincipledThin(PrincipledThin),
     Blend(Blend),
     TwoSided(TwoSided),
     NormalMap(NormalMap),
@@ -252,6 +256,7 @@ macro_rules! dispatch {
             Bsdf::Plastic($m) => $call,
             Bsdf::RoughPlastic($m) => $call,
             Bsdf::Principled($m) => $call,
+            Bsdf::PrincipledThin($m) => $call,
             Bsdf::Blend($m) => $call,
             Bsdf::TwoSided($m) => $call,
             Bsdf::NormalMap($m) => $call,

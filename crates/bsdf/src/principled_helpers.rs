@@ -212,7 +212,6 @@ pub(crate) fn principled_fresnel(
 
 /// The thin sheet's Fresnel term (Mitsuba's `thin_fresnel`): the dielectric Fresnel blended
 /// by `spec_tint` towards a tinted Schlick term of the sheet's η.
-#[allow(dead_code)] // until principledthin uses it
 #[inline]
 pub(crate) fn thin_fresnel(
     f_dielectric: f32,

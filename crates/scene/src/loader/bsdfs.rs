@@ -20,8 +20,8 @@ use radia_bsdf::microfacet::{RoughnessTextures, Shadowing};
 use radia_bsdf::{
     Blend, BlinnPhong, Bsdf, BumpMap, Conductor, CookTorrance, CookTorranceFresnel, Dielectric,
     Diffuse, LobeFlags, Mask, MicrofacetDistribution, MicrofacetType, NormalMap, Null,
-    PerturbOptions, Phong, Plastic, RoughConductor, RoughDielectric, RoughPlastic, ShadingPoint,
-    Texture, ThinDielectric, TwoSided,
+    PerturbOptions, Phong, Plastic, Principled, PrincipledIor, PrincipledThin, RoughConductor,
+    RoughDielectric, RoughPlastic, ShadingPoint, Texture, ThinDielectric, TwoSided,
 };
 
 /// Nested BSDFs (twosided of twosided ...) deeper than this are refused.
@@ -29,7 +29,7 @@ const MAX_NESTING: usize = 32;
 
 /// The plugin names [`build_bsdf`] knows, for the error message.
 const SUPPORTED: &str = "diffuse, conductor, roughconductor, dielectric, thindielectric, \
-roughdielectric, plastic, roughplastic, blendbsdf, twosided, normalmap, bumpmap, mask, null, and radia's \
+roughdielectric, plastic, roughplastic, principled, principledthin, blendbsdf, twosided, normalmap, bumpmap, mask, null, and radia's \
 phong, blinnphong, cooktorrance";
 
 /// Builds the BSDF of node `idx`. A node referenced several times is built once.
@@ -56,6 +56,8 @@ pub(crate) fn build_bsdf(
         "roughdielectric" => rough_dielectric(b, p)?,
         "plastic" => plastic(b, p)?,
         "roughplastic" => rough_plastic(b, p)?,
+        "principled" => principled(b, p)?,
+        "principledthin" => principled_thin(b, p)?,
         "blendbsdf" => blend(b, p, nesting)?,
         "twosided" => twosided(b, p, nesting)?,
         "normalmap" => normal_map(b, p, nesting)?,
@@ -451,6 +453,179 @@ fn rough_plastic(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadErro
     Ok(Bsdf::RoughPlastic(RoughPlastic::new(
         kind, au, visible, int_ior, ext_ior, d, s, nonlinear,
     )))
+}
+
+// ---------------------------------------------------------------------------------------------
+// The Disney principled BSDF
+// ---------------------------------------------------------------------------------------------
+
+/// Mitsuba's `get_flag` (`principledhelpers.h`): a lobe is on when its parameter is given
+/// and is not the float 0.
+fn principled_flag(p: &Props<'_>, name: &str) -> bool {
+    match peek(p, name) {
+        Some(Value::Float(x)) => *x != 0.0,
+        Some(Value::Integer(k)) => *k != 0,
+        Some(_) => true,
+        None => p.has_any(name),
+    }
+}
+
+/// A principled weight: a texture or a constant in [0, 1] (Mitsuba's documentation asks for
+/// that range but does not check it; a weight out of it makes negative lobes). `None` when
+/// [`principled_flag`] is false (the value is still read, as Mitsuba reads it).
+fn principled_weight(
+    b: &mut Builder<'_>,
+    p: &mut Props<'_>,
+    name: &str,
+    default: f64,
+) -> Result<Option<Texture>, LoadError> {
+    let on = principled_flag(p, name);
+    let t = principled_texture(b, p, name, default)?;
+    Ok(on.then_some(t))
+}
+
+/// [`principled_weight`] for the parameters Mitsuba always reads (no flag).
+fn principled_texture(
+    b: &mut Builder<'_>,
+    p: &mut Props<'_>,
+    name: &str,
+    default: f64,
+) -> Result<Texture, LoadError> {
+    principled_texture_max(b, p, name, default, 1.0)
+}
+
+/// [`principled_texture`] with constants in [0, `max`].
+fn principled_texture_max(
+    b: &mut Builder<'_>,
+    p: &mut Props<'_>,
+    name: &str,
+    default: f64,
+    max: f32,
+) -> Result<Texture, LoadError> {
+    let pos = p.pos_of(name);
+    let t = texture_param(b, p, name, default, true)?;
+    if let Some(c) = t.as_constant() {
+        if c.max_element() > max {
+            return Err(p.err_at(
+                pos,
+                format!(
+                    "{}: \"{name}\" must be in [0, {max}], got {}",
+                    p.node.plugin,
+                    c.max_element()
+                ),
+            ));
+        }
+    }
+    Ok(t)
+}
+
+/// A sampling rate: a `<float>` ≥ 0, default 1.
+fn sampling_rate(p: &mut Props<'_>, name: &str) -> Result<f32, LoadError> {
+    let pos = p.pos_of(name);
+    let v = p.float(name, 1.0)?;
+    if !(v.is_finite() && v >= 0.0) {
+        return Err(p.err_at(
+            pos,
+            format!(
+                "{}: \"{name}\" must be a finite number >= 0, got {v}",
+                p.node.plugin
+            ),
+        ));
+    }
+    Ok(v as f32)
+}
+
+/// `principled` (`src/bsdfs/principled.cpp`): base_color 0.5, roughness 0.5, the lobe weights
+/// (metallic, spec_trans, anisotropic, spec_tint, sheen, sheen_tint, flatness, clearcoat;
+/// default 0, each a float or texture), clearcoat_gloss 0, `eta` or `specular` (0.5: η 1.5;
+/// not both), and the three sampling rates (1 each).
+fn principled(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+    let mut m = Principled::new(principled_texture(b, &mut p, "base_color", 0.5)?);
+    m.roughness = principled_texture(b, &mut p, "roughness", 0.5)?;
+    m.anisotropic = principled_weight(b, &mut p, "anisotropic", 0.0)?;
+    m.spec_trans = principled_weight(b, &mut p, "spec_trans", 0.0)?;
+    m.sheen = principled_weight(b, &mut p, "sheen", 0.0)?;
+    m.sheen_tint = principled_weight(b, &mut p, "sheen_tint", 0.0)?;
+    m.flatness = principled_weight(b, &mut p, "flatness", 0.0)?;
+    m.spec_tint = principled_weight(b, &mut p, "spec_tint", 0.0)?;
+    m.metallic = principled_weight(b, &mut p, "metallic", 0.0)?;
+    m.clearcoat = principled_weight(b, &mut p, "clearcoat", 0.0)?;
+    m.clearcoat_gloss = principled_texture(b, &mut p, "clearcoat_gloss", 0.0)?;
+    m.spec_srate = sampling_rate(&mut p, "main_specular_sampling_rate")?;
+    m.clearcoat_srate = sampling_rate(&mut p, "clearcoat_sampling_rate")?;
+    m.diff_refl_srate = sampling_rate(&mut p, "diffuse_reflectance_sampling_rate")?;
+    if m.spec_srate == 0.0 && m.diff_refl_srate == 0.0 {
+        return Err(p.err(
+            "principled: main_specular_sampling_rate and diffuse_reflectance_sampling_rate cannot both be 0",
+        ));
+    }
+    let ior = if p.has_any("eta") && p.has_any("specular") {
+        return Err(p.err(
+            "principled: specified an invalid index of refraction property, either use \"eta\" or \"specular\"",
+        ));
+    } else if p.has_any("eta") {
+        let pos = p.pos_of("eta");
+        let eta = p.float("eta", 1.5)?;
+        if !(eta.is_finite() && eta > 0.0) {
+            return Err(p.err_at(
+                pos,
+                format!("principled: \"eta\" must be a finite number > 0, got {eta}"),
+            ));
+        }
+        PrincipledIor::Eta(eta as f32)
+    } else {
+        let pos = p.pos_of("specular");
+        let s = p.float("specular", 0.5)?;
+        // η = 2/(1 − √(0.08 s)) − 1 is finite for s < 12.5.
+        if !(s.is_finite() && (0.0..12.5).contains(&s)) {
+            return Err(p.err_at(
+                pos,
+                format!("principled: \"specular\" must be in [0, 12.5), got {s}"),
+            ));
+        }
+        PrincipledIor::Specular(s as f32)
+    };
+    p.finish()?;
+    Ok(Bsdf::Principled(m.with_ior(ior)))
+}
+
+/// `principledthin` (`src/bsdfs/principledthin.cpp`): base_color 0.5, roughness 0.5, the
+/// weights anisotropic, spec_trans, spec_tint, sheen, sheen_tint, flatness (in [0, 1]) and
+/// diff_trans (in [0, 2]), `eta` (1.5, a float or texture), and four sampling rates.
+fn principled_thin(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadError> {
+    let mut m = PrincipledThin::new(principled_texture(b, &mut p, "base_color", 0.5)?);
+    m.roughness = principled_texture(b, &mut p, "roughness", 0.5)?;
+    m.anisotropic = principled_weight(b, &mut p, "anisotropic", 0.0)?;
+    m.spec_trans = principled_weight(b, &mut p, "spec_trans", 0.0)?;
+    m.sheen = principled_weight(b, &mut p, "sheen", 0.0)?;
+    m.sheen_tint = principled_weight(b, &mut p, "sheen_tint", 0.0)?;
+    m.flatness = principled_weight(b, &mut p, "flatness", 0.0)?;
+    m.spec_tint = principled_weight(b, &mut p, "spec_tint", 0.0)?;
+    let on = principled_flag(&p, "diff_trans");
+    let dt = principled_texture_max(b, &mut p, "diff_trans", 0.0, 2.0)?;
+    m.diff_trans = on.then_some(dt);
+    let pos = p.pos_of("eta");
+    m.eta = texture_param(b, &mut p, "eta", 1.5, false)?;
+    if let Some(e) = m.eta.as_constant() {
+        if !(e.min_element() > 0.0) {
+            return Err(p.err_at(
+                pos,
+                format!(
+                    "principledthin: \"eta\" must be > 0, got {}",
+                    e.min_element()
+                ),
+            ));
+        }
+    }
+    m.spec_refl_srate = sampling_rate(&mut p, "specular_reflectance_sampling_rate")?;
+    m.spec_trans_srate = sampling_rate(&mut p, "specular_transmittance_sampling_rate")?;
+    m.diff_trans_srate = sampling_rate(&mut p, "diffuse_transmittance_sampling_rate")?;
+    m.diff_refl_srate = sampling_rate(&mut p, "diffuse_reflectance_sampling_rate")?;
+    if m.spec_refl_srate + m.spec_trans_srate + m.diff_trans_srate + m.diff_refl_srate == 0.0 {
+        return Err(p.err("principledthin: the sampling rates cannot all be 0"));
+    }
+    p.finish()?;
+    Ok(Bsdf::PrincipledThin(m))
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -954,6 +1129,113 @@ mod tests {
         load_err(
             r#"<bsdf type="velvet"/>"#,
             "unsupported BSDF plugin type \"velvet\"",
+        );
+    }
+
+    #[test]
+    fn loader_bsdfs_principled() {
+        let Bsdf::Principled(m) = bsdf(r#"<bsdf type="principled"/>"#) else {
+            panic!()
+        };
+        // Mitsuba's defaults: base 0.5, roughness 0.5, specular 0.5 (η 1.5), no optional lobe.
+        assert_eq!(m.base_color.as_constant(), Some(Vec3::splat(0.5)));
+        assert!((m.eta - 1.5).abs() < 1e-6);
+        assert!(m.metallic.is_none() && m.spec_trans.is_none() && m.clearcoat.is_none());
+        assert_eq!(
+            m.flags(),
+            radia_bsdf::LobeFlags::DIFFUSE_REFLECTION | radia_bsdf::LobeFlags::GLOSSY_REFLECTION
+        );
+        let Bsdf::Principled(m) = bsdf(
+            r#"<bsdf type="principled"><rgb name="base_color" value="0.8, 0.2, 0.1"/><float name="metallic" value="0"/><float name="spec_trans" value="0.6"/><float name="eta" value="1"/><float name="clearcoat" value="0.5"/><float name="clearcoat_gloss" value="0.3"/><float name="main_specular_sampling_rate" value="2"/><texture type="checkerboard" name="roughness"/><float name="anisotropic" value="0.5"/><float name="sheen" value="0.2"/><float name="sheen_tint" value="0.2"/><float name="spec_tint" value="0.2"/><float name="flatness" value="0.2"/><float name="clearcoat_sampling_rate" value="0.5"/><float name="diffuse_reflectance_sampling_rate" value="0.5"/></bsdf>"#,
+        ) else {
+            panic!()
+        };
+        // A float 0 turns its lobe off (Mitsuba's get_flag); η = 1 with transmission is 1.001.
+        assert!(m.metallic.is_none() && m.spec_trans.is_some() && m.clearcoat.is_some());
+        assert_eq!(m.eta, 1.001);
+        assert_eq!(
+            (m.spec_srate, m.clearcoat_srate, m.diff_refl_srate),
+            (2.0, 0.5, 0.5)
+        );
+        assert!(!m.roughness.is_constant());
+        assert!(m
+            .flags()
+            .intersects(radia_bsdf::LobeFlags::GLOSSY_TRANSMISSION));
+        let Bsdf::Principled(m) =
+            bsdf(r#"<bsdf type="principled"><float name="specular" value="0.2"/></bsdf>"#)
+        else {
+            panic!()
+        };
+        assert!((m.eta - (2.0 / (1.0 - (0.016f32).sqrt()) - 1.0)).abs() < 1e-6);
+
+        load_err(
+            r#"<bsdf type="principled"><float name="eta" value="1.5"/><float name="specular" value="0.5"/></bsdf>"#,
+            "either use \"eta\" or \"specular\"",
+        );
+        load_err(
+            r#"<bsdf type="principled"><float name="metallic" value="1.5"/></bsdf>"#,
+            "\"metallic\" must be in [0, 1]",
+        );
+        load_err(
+            r#"<bsdf type="principled"><rgb name="base_color" value="1.5, 0, 0"/></bsdf>"#,
+            "range [0, 1]",
+        );
+        load_err(
+            r#"<bsdf type="principled"><float name="eta" value="-1"/></bsdf>"#,
+            "\"eta\" must be a finite number > 0",
+        );
+        load_err(
+            r#"<bsdf type="principled"><float name="specular" value="20"/></bsdf>"#,
+            "\"specular\" must be in [0, 12.5)",
+        );
+        load_err(
+            r#"<bsdf type="principled"><float name="clearcoat_sampling_rate" value="-1"/></bsdf>"#,
+            "must be a finite number >= 0",
+        );
+        load_err(
+            r#"<bsdf type="principled"><float name="main_specular_sampling_rate" value="0"/><float name="diffuse_reflectance_sampling_rate" value="0"/></bsdf>"#,
+            "cannot both be 0",
+        );
+        load_err(
+            r#"<bsdf type="principled"><float name="metalic" value="1"/></bsdf>"#,
+            "metalic",
+        );
+        load_err(
+            r#"<bsdf type="twosided"><bsdf type="principled"><float name="spec_trans" value="1"/></bsdf></bsdf>"#,
+            "transmission",
+        );
+    }
+
+    #[test]
+    fn loader_bsdfs_principled_thin() {
+        let Bsdf::PrincipledThin(m) = bsdf(r#"<bsdf type="principledthin"/>"#) else {
+            panic!()
+        };
+        assert_eq!(m.eta.as_constant(), Some(Vec3::splat(1.5)));
+        assert!(m.spec_trans.is_none() && m.diff_trans.is_none());
+        let Bsdf::PrincipledThin(m) = bsdf(
+            r#"<bsdf type="principledthin"><float name="diff_trans" value="1.5"/><float name="spec_trans" value="0.3"/><float name="eta" value="1.33"/><float name="specular_transmittance_sampling_rate" value="2"/><float name="sheen" value="0"/></bsdf>"#,
+        ) else {
+            panic!()
+        };
+        assert!(m.diff_trans.is_some() && m.spec_trans.is_some() && m.sheen.is_none());
+        assert_eq!((m.spec_trans_srate, m.spec_refl_srate), (2.0, 1.0));
+        load_err(
+            r#"<bsdf type="principledthin"><float name="diff_trans" value="2.5"/></bsdf>"#,
+            "\"diff_trans\" must be in [0, 2]",
+        );
+        load_err(
+            r#"<bsdf type="principledthin"><float name="eta" value="0"/></bsdf>"#,
+            "\"eta\" must be > 0",
+        );
+        load_err(
+            r#"<bsdf type="principledthin"><float name="clearcoat" value="0.5"/></bsdf>"#,
+            "clearcoat",
+        );
+        // Mitsuba's principledthin always has a diffuse transmission lobe: not two-sided.
+        load_err(
+            r#"<bsdf type="twosided"><bsdf type="principledthin"/></bsdf>"#,
+            "transmission",
         );
     }
 
