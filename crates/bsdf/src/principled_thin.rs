@@ -571,8 +571,14 @@ mod tests {
         for (name, p) in corners() {
             let b = p.bsdf();
             for _ in 0..500 {
-                let wi = dir(rng.random_range(0.02..1.0), rng.random_range(0.0..6.28));
-                let wo = dir(rng.random_range(-1.0..1.0), rng.random_range(0.0..6.28));
+                let wi = dir(
+                    rng.random_range(0.02..1.0),
+                    rng.random_range(0.0..std::f32::consts::TAU),
+                );
+                let wo = dir(
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(0.0..std::f32::consts::TAU),
+                );
                 let (f, g) = (b.eval(&SP, wi, wo), b.eval(&SP, -wi, -wo));
                 assert!(
                     (f - g).abs().max_element() <= 1e-5 * f.max_element(),

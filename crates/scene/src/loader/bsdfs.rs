@@ -607,7 +607,7 @@ fn principled_thin(b: &mut Builder<'_>, mut p: Props<'_>) -> Result<Bsdf, LoadEr
     let pos = p.pos_of("eta");
     m.eta = texture_param(b, &mut p, "eta", 1.5, false)?;
     if let Some(e) = m.eta.as_constant() {
-        if !(e.min_element() > 0.0) {
+        if e.min_element().is_nan() || e.min_element() <= 0.0 {
             return Err(p.err_at(
                 pos,
                 format!(
