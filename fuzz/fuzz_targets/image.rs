@@ -1,4 +1,4 @@
-//! `cargo fuzz run image`: see radia_scene::loader::fuzzing::image.
+//! `cargo fuzz run image`: see radia_formats::fuzzing::image.
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| radia_scene::loader::fuzzing::image(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| radia_formats::fuzzing::image(data));

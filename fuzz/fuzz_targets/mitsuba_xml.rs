@@ -1,4 +1,4 @@
-//! `cargo fuzz run mitsuba_xml`: see radia_scene::loader::fuzzing::mitsuba_xml.
+//! `cargo fuzz run mitsuba_xml`: see radia_formats::fuzzing::mitsuba_xml.
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| radia_scene::loader::fuzzing::mitsuba_xml(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| radia_formats::fuzzing::mitsuba_xml(data));

@@ -1,4 +1,4 @@
-//! `cargo fuzz run obj`: see radia_scene::loader::fuzzing::obj.
+//! `cargo fuzz run obj`: see radia_formats::fuzzing::obj.
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| radia_scene::loader::fuzzing::obj(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| radia_formats::fuzzing::obj(data));

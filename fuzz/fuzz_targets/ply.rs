@@ -1,4 +1,4 @@
-//! `cargo fuzz run ply`: see radia_scene::loader::fuzzing::ply.
+//! `cargo fuzz run ply`: see radia_formats::fuzzing::ply.
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| radia_scene::loader::fuzzing::ply(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| radia_formats::fuzzing::ply(data));

@@ -90,6 +90,9 @@ CASES = [
     ("mesh-is-a-directory.xml", "mesh-is-a-directory.xml:8:5", scene('    <shape type="obj">\n        <string name="filename" value="data"/>\n    </shape>\n')),
     ("mesh-is-a-device.xml", "mesh-is-a-device.xml:8:5", scene('    <shape type="ply">\n        <string name="filename" value="/dev/zero"/>\n    </shape>\n')),
     ("envmap-is-a-device.xml", "envmap-is-a-device.xml:9:9", scene('    <emitter type="envmap">\n        <string name="filename" value="/dev/zero"/>\n    </emitter>\n')),
+    ("gltf-shape-missing-file.xml", "gltf-shape-missing-file.xml:8:5", scene('    <shape type="gltf">\n        <string name="filename" value="data/no-such-model.glb"/>\n    </shape>\n')),
+    ("gltf-shape-bad-file.xml", "gltf-shape-bad-file.xml:8:5", scene('    <shape type="gltf">\n        <string name="filename" value="gltf-index-out-of-range.gltf"/>\n    </shape>\n')),
+    ("gltf-shape-with-bsdf.xml", "gltf-shape-with-bsdf.xml:9:9", scene('    <shape type="gltf">\n        <bsdf type="diffuse"/>\n        <string name="filename" value="gltf-index-out-of-range.gltf"/>\n    </shape>\n')),
     # ---- broken meshes ----
     ("ply-truncated.xml", "data/truncated.ply", scene('    <shape type="ply">\n        <string name="filename" value="data/truncated.ply"/>\n    </shape>\n')),
     ("ply-bad-header.xml", "data/bad-header.ply", scene('    <shape type="ply">\n        <string name="filename" value="data/bad-header.ply"/>\n    </shape>\n')),

@@ -8,7 +8,8 @@
 //! render-space origin + `world_origin`.
 
 use glam::{Vec2, Vec3};
-use radia_scene::{load_mitsuba_xml, Scene};
+use radia_formats::load_mitsuba_xml;
+use radia_scene::Scene;
 use std::path::PathBuf;
 
 fn write_scene(name: &str, body: &str) -> PathBuf {

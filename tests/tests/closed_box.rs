@@ -3,9 +3,9 @@
 //! scaled by 10⁻⁴ and 10⁵ and moved 10⁵ from the origin. Any ray that slipped through an
 //! edge, a vertex or a badly offset origin would carry light across and make a pixel non-zero.
 
+use radia_formats::load_mitsuba_xml_str;
 use radia_render::{render, RenderOptions};
 use radia_sampling::SamplerKind;
-use radia_scene::loader::load_mitsuba_xml_str;
 use radia_scene::Scene;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;

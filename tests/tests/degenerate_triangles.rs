@@ -3,9 +3,9 @@
 //! or infinite coordinates are refused with an error naming the file. A mesh made mostly of
 //! degenerate and sliver triangles then renders without one NaN sample.
 
+use radia_formats::load_mitsuba_xml_with_warnings;
 use radia_render::{render, RenderOptions};
 use radia_sampling::SamplerKind;
-use radia_scene::loader::load_mitsuba_xml_with_warnings;
 use radia_scene::{Geometry, Scene};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;

@@ -1,5 +1,5 @@
-//! Displacement mapping (radia's `displacement` on mesh shapes, `crates/scene/src/loader/
-//! displacement.rs`): a displaced plane and the same surface modelled directly as a mesh are
+//! Displacement mapping (radia's `displacement` on mesh shapes, `crates/formats/src/
+//! mitsuba/displacement.rs`): a displaced plane and the same surface modelled directly as a mesh are
 //! the same geometry and render the same.
 //!
 //! The displaced plane is Mitsuba's `rectangle`, subdivided 4 times (a 16 × 16 grid) and
@@ -11,9 +11,9 @@
 //! shapes have the same non-uniformly scaling `to_world`: the displacement is in object
 //! space, before it.
 
+use radia_formats::load_mitsuba_xml;
 use radia_render::Image;
 use radia_sampling::SamplerKind;
-use radia_scene::loader::load_mitsuba_xml;
 use radia_scene::{Geometry, Mesh, Scene, SceneDescription};
 use radia_tests::render_with;
 use std::collections::HashMap;

@@ -2,7 +2,7 @@
 //! fuzz target once, or that reach deep into a reader) through the fuzz targets' own entry
 //! points, so that a fixed crash stays fixed without nightly Rust or cargo-fuzz.
 
-use radia_scene::loader::fuzzing;
+use radia_formats::fuzzing;
 use std::path::Path;
 
 fn replay(target: &str, entry: fn(&[u8])) {
@@ -53,7 +53,7 @@ fn image_regressions() {
 fn exr_declaring_more_pixels_than_the_file_holds_is_refused_before_allocating() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../fuzz/regressions/image/oom-huge-data-window.exr");
-    let err = radia_scene::loader::decode_rgb_image(&std::fs::read(path).unwrap())
+    let err = radia_formats::decode_rgb_image(&std::fs::read(path).unwrap())
         .err()
         .expect("a truncated EXR must not decode");
     assert!(err.contains("corrupt OpenEXR image"), "{err}");

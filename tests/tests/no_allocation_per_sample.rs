@@ -9,9 +9,10 @@
 //! a block now and then as jobs pass through them, independently of what the jobs do (one
 //! extra allocation was seen in 156 pairs of renders); [`POOL_SLACK`] allows for that.
 
+use radia_formats::load_mitsuba_xml;
 use radia_render::PASS_SPP;
 use radia_sampling::SamplerKind;
-use radia_scene::{load_mitsuba_xml, Scene};
+use radia_scene::Scene;
 use radia_tests::render_with;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::Path;

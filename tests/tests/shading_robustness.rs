@@ -5,9 +5,9 @@
 
 use glam::{Vec2, Vec3};
 use radia_bsdf::{Bsdf, ShadingPoint};
+use radia_formats::load_mitsuba_xml_str;
 use radia_render::{render, RenderOptions};
 use radia_sampling::SamplerKind;
-use radia_scene::loader::load_mitsuba_xml_str;
 use radia_scene::Scene;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;

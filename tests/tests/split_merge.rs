@@ -10,10 +10,11 @@
 //!   within 2(n − 1)·u relative of each other in the numerator and in the weight, n being the
 //!   number of (sample, pixel) contributions to a pixel.
 
+use radia_formats::load_mitsuba_xml;
 use radia_render::part::{merge, Part, RenderIdentity};
 use radia_render::{render, render_part, RenderOptions, SampleRange, PASS_SPP};
 use radia_sampling::SamplerKind;
-use radia_scene::{load_mitsuba_xml, FilterDesc, LightSamplerKind, Scene, SceneDescription};
+use radia_scene::{FilterDesc, LightSamplerKind, Scene, SceneDescription};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 

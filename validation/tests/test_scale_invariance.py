@@ -65,7 +65,7 @@ class ScaleInvarianceTest(unittest.TestCase):
         # 1e5 from the origin a float32 is 7.8 mm apart, 0.4% of the 2 m box: rendered
         # there, contact shadows and corners moved by a few percent within a pixel or two
         # of them (4x4 blocks up to 3.7% apart). The loader now renders in camera-relative
-        # coordinates (crates/scene/src/loader/build.rs, `Builder::to_world`): every
+        # coordinates (crates/formats/src/mitsuba/build.rs, `Builder::to_world`): every
         # transform is composed in double precision and moved so that the camera sits at the
         # origin before it is rounded to float32, so the translated box is the original box
         # and must agree pixel by pixel.

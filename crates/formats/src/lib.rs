@@ -6,19 +6,30 @@
 //! | format | extension | reader |
 //! | --- | --- | --- |
 //! | glTF 2.0 (JSON with external or embedded buffers, or binary GLB) | `.gltf`, `.glb` | [`gltf::load_gltf`] (module [`gltf`]) |
-//! | Mitsuba 3 XML | anything else | [`radia_scene::load_mitsuba_xml`] |
+//! | Mitsuba 3 XML | anything else | [`mitsuba::load_mitsuba_xml`] (module [`mitsuba`]) |
+//! | PLY (ASCII and binary), Wavefront OBJ | `.ply`, `.obj` (named by a scene) | [`load_ply`], [`load_obj`] |
+//! | images: OpenEXR, Radiance HDR, PNG, JPEG | named by a scene | [`decode_rgb_image`] (module `image`) |
 //!
-//! The Mitsuba XML, PLY and OBJ readers still live in `radia_scene::loader` and will move
-//! into this crate (issue #10's layout item), so that `crates/scene` knows no file format;
-//! [`load_scene`] already hides where they are.
+//! Every reader reports a problem as a [`LoadError`] naming the file and, where there is
+//! one, the line and column. `mesh` turns what a mesh reader found into a
+//! [`radia_scene::Mesh`] the same way for every format (normals, degenerate triangles).
 
+mod error;
 pub mod fuzzing;
 pub mod gltf;
+mod image;
+mod mesh;
+pub mod mitsuba;
+mod obj;
+mod ply;
 
+pub use error::{LoadError, TextPos};
 pub use gltf::{load_gltf, load_gltf_with_warnings, GltfOptions};
-pub use radia_scene::LoadError;
+pub use image::decode_rgb_image;
+pub use mitsuba::{load_mitsuba_xml, load_mitsuba_xml_str, load_mitsuba_xml_with_warnings};
 
-use radia_scene::SceneDescription;
+use glam::DMat4;
+use radia_scene::{Mesh, SceneDescription};
 use std::path::Path;
 
 /// The file formats radia reads.
@@ -68,6 +79,81 @@ pub fn load_scene(path: &Path, options: &SceneOptions) -> Result<SceneDescriptio
             }
             load_gltf(path, &options.gltf)
         }
-        SceneFormat::MitsubaXml => radia_scene::load_mitsuba_xml(path, &options.defines),
+        SceneFormat::MitsubaXml => load_mitsuba_xml(path, &options.defines),
     }
+}
+
+/// Reads a Wavefront OBJ file as Mitsuba's `obj` shape with the identity transform
+/// (`flip_tex_coords`: v → 1 − v, Mitsuba's default for OBJ). Normals missing from the file
+/// are recomputed; degenerate triangles are dropped.
+pub fn load_obj(path: &Path, flip_tex_coords: bool) -> Result<Mesh, LoadError> {
+    let data = read_regular_file(path)
+        .map_err(|e| LoadError::in_file(path, format!("cannot read mesh file: {e}")))?;
+    obj_from_bytes(path, &data, flip_tex_coords)
+}
+
+/// [`load_obj`] of the file's bytes (`path` names it in errors).
+pub fn obj_from_bytes(path: &Path, data: &[u8], flip_tex_coords: bool) -> Result<Mesh, LoadError> {
+    let raw = obj::parse_obj(&String::from_utf8_lossy(data), flip_tex_coords, false)
+        .map_err(|e| LoadError::at_line(path, e.line, e.message))?;
+    let (m, _) = mesh::finalize(raw, &DMat4::IDENTITY, false, false)
+        .map_err(|e| LoadError::in_file(path, e))?;
+    Ok(m)
+}
+
+/// Reads a PLY file (ASCII or binary) as Mitsuba's `ply` shape with the identity transform.
+/// Normals missing from the file are recomputed; degenerate triangles are dropped.
+pub fn load_ply(path: &Path, flip_tex_coords: bool) -> Result<Mesh, LoadError> {
+    let data = read_regular_file(path)
+        .map_err(|e| LoadError::in_file(path, format!("cannot read mesh file: {e}")))?;
+    ply_from_bytes(path, &data, flip_tex_coords)
+}
+
+/// [`load_ply`] of the file's bytes (`path` names it in errors).
+pub fn ply_from_bytes(path: &Path, data: &[u8], flip_tex_coords: bool) -> Result<Mesh, LoadError> {
+    let raw =
+        ply::parse_ply(data, flip_tex_coords, false).map_err(|e| LoadError::in_file(path, e))?;
+    let (m, _) = mesh::finalize(raw, &DMat4::IDENTITY, false, false)
+        .map_err(|e| LoadError::in_file(path, e))?;
+    Ok(m)
+}
+
+/// `std::fs::read` of a regular file only: a device (`/dev/zero`, a FIFO) named as a mesh
+/// or image would otherwise be read until memory runs out, or block forever.
+pub(crate) fn read_regular_file(path: &Path) -> std::io::Result<Vec<u8>> {
+    if NO_DISK.with(std::cell::Cell::get) {
+        return Err(std::io::Error::other("file access is disabled (fuzzing)"));
+    }
+    let meta = std::fs::metadata(path)?;
+    if !meta.is_file() {
+        let what = if meta.is_dir() {
+            "a directory"
+        } else {
+            "not a regular file"
+        };
+        return Err(std::io::Error::other(format!(
+            "{} is {what}",
+            path.display()
+        )));
+    }
+    std::fs::read(path)
+}
+
+thread_local! {
+    /// Set while [`without_disk`] runs: every file read of the loaders fails.
+    static NO_DISK: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Runs `f` with the loaders' file reads disabled on this thread (fuzzing: a scene names
+/// meshes and images, and must not reach the real disk).
+pub(crate) fn without_disk<R>(f: impl FnOnce() -> R) -> R {
+    struct Reset;
+    impl Drop for Reset {
+        fn drop(&mut self) {
+            NO_DISK.with(|d| d.set(false));
+        }
+    }
+    NO_DISK.with(|d| d.set(true));
+    let _reset = Reset;
+    f()
 }

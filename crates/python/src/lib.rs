@@ -12,6 +12,7 @@ use pyo3::create_exception;
 use pyo3::exceptions::{PyOSError, PyRuntimeError, PyUserWarning, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict};
+use radia_formats::load_mitsuba_xml_with_warnings;
 use radia_render::aov::AovFilm;
 use radia_render::film::develop_pixel;
 use radia_render::part::{self, Part, PartError, RenderIdentity};
@@ -20,7 +21,6 @@ use radia_render::{
     SampleRange,
 };
 use radia_sampling::SamplerKind;
-use radia_scene::loader::load_mitsuba_xml_with_warnings;
 use radia_scene::{parse_aovs, AovDesc, FilterDesc, LightSamplerKind, Scene};
 use std::ffi::CString;
 use std::path::PathBuf;

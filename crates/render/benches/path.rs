@@ -12,9 +12,10 @@
 
 use divan::counter::ItemsCount;
 use divan::{black_box, Bencher};
+use radia_formats::load_mitsuba_xml;
 use radia_render::{render, RenderOptions};
 use radia_sampling::SamplerKind;
-use radia_scene::{load_mitsuba_xml, Scene};
+use radia_scene::Scene;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::LazyLock;

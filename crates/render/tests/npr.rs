@@ -4,7 +4,7 @@
 mod common;
 
 use common::{aov_plane, render_xml, sensor, write_scene};
-use radia_scene::load_mitsuba_xml;
+use radia_formats::load_mitsuba_xml;
 use std::collections::BTreeSet;
 
 #[test]

@@ -22,11 +22,12 @@ use divan::counter::ItemsCount;
 use divan::{black_box, Bencher};
 use glam::{Affine3A, Vec2, Vec3};
 use radia_bsdf::{Bsdf, Diffuse};
+use radia_formats::load_mitsuba_xml;
 use radia_math::{Frame, Ray};
 use radia_sampling::warp::{square_to_cosine_hemisphere, square_to_uniform_sphere};
 use radia_scene::{
-    load_mitsuba_xml, look_at, CameraDesc, FilmDesc, Geometry, IntegratorDesc, Mesh, SamplerDesc,
-    Scene, SceneDescription, ShapeDesc,
+    look_at, CameraDesc, FilmDesc, Geometry, IntegratorDesc, Mesh, SamplerDesc, Scene,
+    SceneDescription, ShapeDesc,
 };
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;

@@ -7,7 +7,8 @@
 //! then `Scene::build` as a whole, and separately the parts of it that scale with the mesh:
 //! the shapes' area sums (`Shape::new`), `Lights::build` and `Accel::build` (the BVH).
 
-use radia_scene::{lights, load_mitsuba_xml, Accel, LightSamplerKind, Lights, Scene, Shape};
+use radia_formats::load_mitsuba_xml;
+use radia_scene::{lights, Accel, LightSamplerKind, Lights, Scene, Shape};
 use std::path::PathBuf;
 use std::time::Instant;
 

@@ -1,5 +1,6 @@
-//! The typed scene: camera, shapes and their BVH, emitters; and the loaders that build it
-//! (Mitsuba 3 XML, PLY and OBJ meshes).
+//! The typed scene: camera, shapes and their BVH, emitters, light selection. It knows no
+//! file format: the readers in `radia-formats` (Mitsuba XML, glTF, PLY, OBJ, images) build
+//! its [`SceneDescription`], and [`Scene::build`] makes that renderable.
 
 pub mod accel;
 mod aov;
@@ -8,7 +9,6 @@ pub mod description;
 pub mod emitter;
 mod fingerprint;
 pub mod lights;
-pub mod loader;
 pub mod memory;
 pub mod shape;
 mod spherical;
@@ -18,7 +18,6 @@ pub use camera::{look_at, Camera};
 pub use description::*;
 pub use emitter::{Emitter, EmitterSample};
 pub use lights::{LightContext, LightSamplerKind, Lights};
-pub use loader::{load_mitsuba_xml, LoadError};
 pub use shape::{Shape, SurfaceInteraction};
 
 use glam::Vec3;

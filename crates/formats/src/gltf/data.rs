@@ -4,10 +4,10 @@
 //! panic on a wrong type or stride).
 
 use super::SUPPORTED_EXTENSIONS;
+use crate::LoadError;
 use base64::Engine;
 use gltf::accessor::{DataType, Dimensions};
 use gltf::Accessor;
-use radia_scene::LoadError;
 use std::path::{Path, PathBuf};
 
 /// A parsed, validated glTF document with its buffers loaded.
@@ -20,8 +20,8 @@ pub(crate) struct GltfFile {
 impl GltfFile {
     pub fn open(path: &Path) -> Result<Self, LoadError> {
         let err = |msg: String| LoadError::in_file(path, msg);
-        let bytes =
-            std::fs::read(path).map_err(|e| err(format!("cannot read the glTF file: {e}")))?;
+        let bytes = crate::read_regular_file(path)
+            .map_err(|e| err(format!("cannot read the glTF file: {e}")))?;
         let is_glb = bytes.starts_with(b"glTF");
         let parsed = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| {
             err(match (&e, is_glb) {
@@ -187,7 +187,7 @@ pub(crate) fn read_uri(dir: &Path, uri: &str) -> Result<Vec<u8>, String> {
         }
     }
     let file: PathBuf = dir.join(percent_decode(uri)?);
-    std::fs::read(&file).map_err(|e| format!("cannot read \"{}\": {e}", file.display()))
+    crate::read_regular_file(&file).map_err(|e| format!("cannot read \"{}\": {e}", file.display()))
 }
 
 /// URIs in glTF are percent-encoded (RFC 3986): "my%20mesh.bin" is "my mesh.bin".

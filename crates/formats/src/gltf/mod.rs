@@ -60,10 +60,12 @@ mod nodes;
 mod tangents;
 mod textures;
 
+use crate::LoadError;
 use data::GltfFile;
+use glam::DMat4;
 use radia_math::Spectrum;
 use radia_scene::{
-    EmitterDesc, FilmDesc, IntegratorDesc, LoadError, SamplerDesc, SceneDescription,
+    EmitterDesc, FilmDesc, Geometry, IntegratorDesc, SamplerDesc, SceneDescription, ShapeDesc,
 };
 use std::path::Path;
 
@@ -108,57 +110,8 @@ pub fn load_gltf_with_warnings(
     let err = |msg: String| LoadError::in_file(path, msg);
     let mut warnings = Vec::new();
     let mut warn = |msg: String| warnings.push(format!("{}: {msg}", path.display()));
-
-    let unsupported = data::unsupported_used(&file.doc);
-    if !unsupported.is_empty() {
-        warn(format!(
-            "the file uses extension(s) radia does not support, which are ignored: {}",
-            unsupported.join(", ")
-        ));
-    }
     let instances = nodes::flatten(&file.doc, &mut warn).map_err(err)?;
-
-    let mut shapes = Vec::new();
-    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let mut images = textures::Images::new(&file, &dir);
-    let mut materials = material::Materials::new();
-    let mut mesh_warnings = mesh::Warnings::default();
-    for inst in &instances.meshes {
-        for prim in inst.mesh.primitives() {
-            let mat = materials
-                .get(prim.material(), &mut images, &mut warn)
-                .map_err(err)?;
-            if mat.cut_out {
-                continue;
-            }
-            let tex_coord = mat.tex_coord.unwrap_or(0);
-            let Some(shape) = mesh::build_primitive(
-                &file,
-                inst,
-                &prim,
-                tex_coord,
-                mat.normal_mapped,
-                &mut mesh_warnings,
-            )
-            .map_err(err)?
-            else {
-                continue;
-            };
-            shapes.push(radia_scene::ShapeDesc {
-                geometry: radia_scene::Geometry::Mesh(shape),
-                bsdf: mat.bsdf.clone(),
-                emission: mat.emission.clone(),
-                origin: format!(
-                    "{}: mesh {} primitive {}",
-                    path.display(),
-                    inst.mesh.index(),
-                    prim.index()
-                ),
-            });
-        }
-    }
-    mesh_warnings.report(&mut warn);
-
+    let shapes = read_shapes(&file, path, &instances, &mut warn)?;
     let mut emitters: Vec<EmitterDesc> = instances
         .lights
         .iter()
@@ -196,6 +149,91 @@ pub fn load_gltf_with_warnings(
         sampling_weights: Default::default(),
     };
     Ok((desc, warnings))
+}
+
+/// The surfaces of a glTF file as a Mitsuba XML scene's `<shape type="gltf">` uses them
+/// (radia's extension): every mesh primitive of the default scene with its material
+/// (emissive ones glow), each node's transform followed by `to_world`. The file's cameras
+/// and lights are not part of a shape: the XML scene frames and lights it, and a warning
+/// says what was left out.
+pub(crate) fn load_gltf_shapes(
+    path: &Path,
+    to_world: DMat4,
+    warn: &mut dyn FnMut(String),
+) -> Result<Vec<ShapeDesc>, LoadError> {
+    let file = GltfFile::open(path)?;
+    let mut warn = |msg: String| warn(format!("{}: {msg}", path.display()));
+    let mut instances =
+        nodes::flatten(&file.doc, &mut warn).map_err(|e| LoadError::in_file(path, e))?;
+    for inst in &mut instances.meshes {
+        inst.to_world = to_world * inst.to_world;
+    }
+    let (lights, cameras) = (instances.lights.len(), instances.cameras.len());
+    if lights + cameras > 0 {
+        warn(format!(
+            "<shape type=\"gltf\"> takes the file's surfaces only: its {lights} light(s) and \
+             {cameras} camera(s) are not used"
+        ));
+    }
+    read_shapes(&file, path, &instances, &mut warn)
+}
+
+/// The shapes of the mesh instances, each primitive with its material.
+fn read_shapes(
+    file: &GltfFile,
+    path: &Path,
+    instances: &nodes::Instances<'_>,
+    warn: &mut dyn FnMut(String),
+) -> Result<Vec<ShapeDesc>, LoadError> {
+    let err = |msg: String| LoadError::in_file(path, msg);
+    let unsupported = data::unsupported_used(&file.doc);
+    if !unsupported.is_empty() {
+        warn(format!(
+            "the file uses extension(s) radia does not support, which are ignored: {}",
+            unsupported.join(", ")
+        ));
+    }
+    let mut shapes = Vec::new();
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut images = textures::Images::new(file, &dir);
+    let mut materials = material::Materials::new();
+    let mut mesh_warnings = mesh::Warnings::default();
+    for inst in &instances.meshes {
+        for prim in inst.mesh.primitives() {
+            let mat = materials
+                .get(prim.material(), &mut images, &mut *warn)
+                .map_err(err)?;
+            if mat.cut_out {
+                continue;
+            }
+            let tex_coord = mat.tex_coord.unwrap_or(0);
+            let Some(shape) = mesh::build_primitive(
+                file,
+                inst,
+                &prim,
+                tex_coord,
+                mat.normal_mapped,
+                &mut mesh_warnings,
+            )
+            .map_err(err)?
+            else {
+                continue;
+            };
+            shapes.push(ShapeDesc {
+                geometry: Geometry::Mesh(shape),
+                bsdf: mat.bsdf.clone(),
+                emission: mat.emission.clone(),
+                origin: format!(
+                    "{}: mesh {} primitive {}",
+                    path.display(),
+                    inst.mesh.index(),
+                    prim.index()
+                ),
+            });
+        }
+    }
+    mesh_warnings.report(&mut *warn);
+    Ok(shapes)
 }
 
 /// The film: `resolution`, else [`DEFAULT_FILM_WIDTH`] wide with the given aspect.

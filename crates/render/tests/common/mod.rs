@@ -2,9 +2,10 @@
 
 #![allow(dead_code)] // each test binary uses its own part
 
+use radia_formats::load_mitsuba_xml;
 use radia_render::{render, RenderOptions, RenderOutput};
 use radia_sampling::SamplerKind;
-use radia_scene::{load_mitsuba_xml, Scene};
+use radia_scene::Scene;
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 

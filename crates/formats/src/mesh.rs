@@ -3,8 +3,8 @@
 //! normals by its inverse transpose (renormalized), missing normals recomputed with
 //! Mitsuba's angle-weighted scheme (`Mesh::recompute_vertex_normals`, `src/render/mesh.cpp`).
 
-use crate::Mesh;
 use glam::{DMat3, DMat4, Vec2, Vec3};
+use radia_scene::Mesh;
 use rayon::prelude::*;
 use std::f32::consts::PI;
 

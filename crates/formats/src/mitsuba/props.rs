@@ -2,8 +2,8 @@
 //! Mitsuba's `Properties` with its "unreferenced property" check, every property the plugin
 //! did not ask for is an error in [`Props::finish`].
 
-use super::error::{LoadError, TextPos};
 use super::xml::{Doc, Kind, Node, Value};
+use crate::error::{LoadError, TextPos};
 use glam::{DMat4, DVec3};
 
 pub(crate) struct Props<'a> {

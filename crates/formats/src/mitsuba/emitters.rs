@@ -1,15 +1,15 @@
 //! Emitter plugins (`src/emitters/*.cpp`): `area` inside a shape; `point`, `spot`,
 //! `directional`, `constant` and `envmap` at the top level, with Mitsuba's parameter names,
-//! defaults and checks. Their semantics are documented in [`crate::emitter`].
+//! defaults and checks. Their semantics are documented in [`radia_scene::emitter`].
 
 use super::build::Builder;
-use super::image::read_rgb_image;
 use super::props::Props;
 use super::shapes::resolve_path;
 use super::LoadError;
-use crate::EmitterDesc;
+use crate::image::read_rgb_image;
 use glam::{Affine3A, DMat4, DVec3};
 use radia_bsdf::Texture;
+use radia_scene::EmitterDesc;
 
 /// A top-level emitter and its `sampling_weight`.
 pub(crate) fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<(EmitterDesc, f32), LoadError> {

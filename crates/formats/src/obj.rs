@@ -4,7 +4,7 @@
 //! are fan-triangulated; one output vertex per distinct (v, vt, vn) triple, numbered in order
 //! of first use.
 
-use super::mesh::RawMesh;
+use crate::mesh::RawMesh;
 use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 

@@ -2,7 +2,8 @@
 //! formats (OpenEXR and Radiance RGBE linear, PNG sRGB-decoded).
 
 use glam::{Affine3A, Vec3};
-use radia_scene::{load_mitsuba_xml, Emitter, EmitterDesc, RgbImage, Scene, SceneDescription};
+use radia_formats::load_mitsuba_xml;
+use radia_scene::{Emitter, EmitterDesc, RgbImage, Scene, SceneDescription};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 

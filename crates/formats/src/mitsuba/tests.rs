@@ -1,11 +1,12 @@
 //! Loader tests: every file is written to a fresh temporary directory.
 
 use super::*;
-use crate::{
-    EmitterDesc, FilmDesc, FilterDesc, Geometry, IntegratorDesc, Mesh, SamplerDesc, ShapeDesc,
-};
+use crate::{load_obj, load_ply, mesh, obj, ply};
 use glam::{Affine3A, Mat4, Vec2, Vec3, Vec4};
 use radia_bsdf::{Bsdf, Texture};
+use radia_scene::{
+    EmitterDesc, FilmDesc, FilterDesc, Geometry, IntegratorDesc, Mesh, SamplerDesc, ShapeDesc,
+};
 use std::f32::consts::{FRAC_PI_2, FRAC_PI_4};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -336,7 +337,7 @@ fn loader_principal_point_offset_shifts_the_image_plane() {
         <film type="hdrfilm"><integer name="width" value="200"/><integer name="height" value="100"/></film></sensor>"#,
     );
     assert_eq!(s.camera.principal_point_offset, Vec2::new(0.1, -0.05));
-    let camera = crate::Camera::new(&s.camera, 200, 100);
+    let camera = radia_scene::Camera::new(&s.camera, 200, 100);
     let ray = camera.generate_ray(Vec2::new(0.55, 0.45));
     let expected = Vec3::new(-0.3, 0.1, 1.0).normalize();
     assert_vec_close(
@@ -346,8 +347,8 @@ fn loader_principal_point_offset_shifts_the_image_plane() {
         "ray towards the hand-projected point",
     );
     // Without the offset the same film position looks elsewhere (the test can fail).
-    let centred = crate::Camera::new(
-        &crate::CameraDesc {
+    let centred = radia_scene::Camera::new(
+        &radia_scene::CameraDesc {
             principal_point_offset: Vec2::ZERO,
             ..s.camera.clone()
         },
@@ -387,11 +388,14 @@ fn loader_sampling_weights() {
     assert_eq!(s.sampling_weights.emitter(0), 3.0);
     assert_eq!(s.sampling_weights.emitter(1), 1.0, "the default is 1");
     // The scene gives them to the light selection by emitter: area lights first.
-    let scene = crate::Scene::build(s);
+    let scene = radia_scene::Scene::build(s);
     assert_eq!(scene.sampling_weights, vec![0.25, 3.0, 1.0]);
 
     let plain = load_ok("sampling-weights-none", r#"<emitter type="point"/>"#);
-    assert_eq!(plain.sampling_weights, crate::SamplingWeights::default());
+    assert_eq!(
+        plain.sampling_weights,
+        radia_scene::SamplingWeights::default()
+    );
 
     for (value, needle) in [
         (
@@ -672,7 +676,7 @@ fn loader_film_sampler_integrator() {
 
 #[test]
 fn loader_aov_integrator() {
-    use crate::{AovDesc, AovKind, AovOutput};
+    use radia_scene::{AovDesc, AovKind, AovOutput};
     let s = load_ok(
         "aov",
         r#"<integrator type="aov"><string name="aovs" value="dd.y:depth,nn:sh_normal"/>
@@ -747,7 +751,7 @@ fn loader_aov_integrator() {
 
 #[test]
 fn loader_classic_integrator() {
-    use crate::{ClassicDesc, ClassicShading};
+    use radia_scene::{ClassicDesc, ClassicShading};
     let s = load_ok(
         "classic",
         r#"<integrator type="classic"><rgb name="ambient" value="0.1"/><string name="attenuation" value="1, 0.5, 0"/>

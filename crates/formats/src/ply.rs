@@ -5,7 +5,7 @@
 //! fan-triangulated here (a quad becomes two triangles). Other elements and properties are
 //! skipped.
 
-use super::mesh::RawMesh;
+use crate::mesh::RawMesh;
 use glam::{Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -849,10 +849,10 @@ fn mask(b: &mut Builder<'_>, mut p: Props<'_>, nesting: usize) -> Result<Bsdf, L
 mod tests {
     //! The BSDF plugins' parameters: defaults, alternatives and errors. (Loading whole
     //! scenes is tested in `loader/tests.rs`.)
-    use crate::loader::load_mitsuba_xml_with_warnings;
-    use crate::SceneDescription;
+    use crate::mitsuba::load_mitsuba_xml_with_warnings;
     use glam::{Vec2, Vec3};
     use radia_bsdf::{Bsdf, ShadingPoint};
+    use radia_scene::SceneDescription;
 
     /// A scene with one sphere whose BSDF is `bsdf` (XML), loaded from a temporary file.
     fn load(bsdf: &str) -> Result<(SceneDescription, Vec<String>), String> {

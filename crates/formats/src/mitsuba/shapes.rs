@@ -5,12 +5,13 @@ use super::bsdfs::{build_bsdf, default_bsdf};
 use super::build::Builder;
 use super::displacement::{self, MeshModifier};
 use super::emitters::area_emitter;
-use super::mesh::{self, MeshStats, RawMesh};
 use super::props::Props;
 use super::xml::Kind;
-use super::{obj, ply, LoadError};
-use crate::{Geometry, ShapeDesc};
+use super::LoadError;
+use crate::mesh::{self, MeshStats, RawMesh};
+use crate::{obj, ply};
 use glam::{DMat3, DMat4, DVec3};
+use radia_scene::{Geometry, ShapeDesc};
 use std::path::{Path, PathBuf};
 
 /// A shape and the `sampling_weight` of its area emitter (1 if it has none).
@@ -68,7 +69,7 @@ pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<(ShapeDesc,
             };
             let path = resolve_path(&b.doc.dir, filename);
             let (file, line, col) = (b.doc.file_of(p.node), p.node.pos.line, p.node.pos.col);
-            let data = super::read_regular_file(&path).map_err(|e| {
+            let data = crate::read_regular_file(&path).map_err(|e| {
                 let what = if e.kind() == std::io::ErrorKind::NotFound { "not found".to_string() } else { e.to_string() };
                 LoadError::at(
                     file,
@@ -226,4 +227,45 @@ pub(crate) fn resolve_path(dir: &Path, filename: &str) -> PathBuf {
         return f.to_path_buf();
     }
     in_dir
+}
+
+/// radia's `<shape type="gltf">` (an extension): the surfaces of a glTF 2.0 file
+/// (`filename`, `.gltf` or `.glb`) with the file's own materials, each placed by its node
+/// transforms and then by `to_world`, so that a glTF asset can be framed and lit by a Mitsuba
+/// scene ([`crate::gltf`] reads it; the file's cameras and lights are left out, with a
+/// warning). One glTF primitive becomes one shape.
+pub(crate) fn build_gltf_shapes(
+    b: &mut Builder<'_>,
+    idx: usize,
+) -> Result<Vec<ShapeDesc>, LoadError> {
+    let mut p = Props::new(b.doc, idx);
+    let (file, pos) = (b.doc.file_of(p.node), p.node.pos);
+    for (i, _, kind) in p.objects() {
+        if matches!(kind, Kind::Bsdf | Kind::Emitter) {
+            return Err(p.err_at(
+                p.prop_pos(i),
+                "<shape type=\"gltf\"> takes its materials and emission from the glTF file: \
+                 a nested <bsdf> or <emitter> is not supported",
+            ));
+        }
+    }
+    let to_world = b.to_world(&mut p)?;
+    let Some(filename) = p.string_opt("filename")? else {
+        return Err(p.err("<shape type=\"gltf\">: the \"filename\" parameter is required"));
+    };
+    let path = resolve_path(&b.doc.dir, filename);
+    p.finish()?;
+    let mut warnings = Vec::new();
+    let shapes = crate::gltf::load_gltf_shapes(&path, to_world, &mut |w| warnings.push(w))
+        .map_err(|e| LoadError::at(file, pos, format!("<shape type=\"gltf\">: {e}")))?;
+    let where_ = format!("{}:{}:{}", file.display(), pos.line, pos.col);
+    for w in warnings {
+        b.warnings.push(format!("{where_}: {w}"));
+    }
+    if shapes.is_empty() {
+        b.warnings.push(format!(
+            "{where_}: <shape type=\"gltf\">: \"{filename}\" has no triangles to render"
+        ));
+    }
+    Ok(shapes)
 }

@@ -37,10 +37,10 @@
 //! are displaced separately: where their normals or heights differ, the surface opens.
 
 use super::build::Builder;
-use super::mesh::{recompute_vertex_normals, RawMesh};
 use super::props::Props;
 use super::textures::{is_texture, texture_param};
 use super::LoadError;
+use crate::mesh::{recompute_vertex_normals, RawMesh};
 use glam::{Vec2, Vec3};
 use radia_bsdf::{ShadingPoint, Texture};
 use radia_math::luminance;
@@ -251,7 +251,7 @@ mod tests {
 
     /// Mitsuba's rectangle ([-1, 1]², uv = (p + 1)/2), two triangles.
     fn plane() -> RawMesh {
-        super::super::mesh::rectangle()
+        crate::mesh::rectangle()
     }
 
     /// A closed tetrahedron without uvs.
@@ -394,7 +394,7 @@ mod tests {
         let levels = 4;
         let raw = apply(plane(), &modifier(levels, Some(d))).unwrap();
         let (mesh, stats) =
-            super::super::mesh::finalize(raw, &glam::DMat4::IDENTITY, false, false).unwrap();
+            crate::mesh::finalize(raw, &glam::DMat4::IDENTITY, false, false).unwrap();
         assert_eq!(stats.invalid_normals, 0);
         let slope = 4.0 * s / 7.0;
         let analytic = Vec3::new(-slope, 0.0, 1.0).normalize();

@@ -4,18 +4,18 @@
 use super::bsdfs::build_bsdf;
 use super::emitters::build_emitter;
 use super::props::Props;
-use super::shapes::build_shape;
+use super::shapes::{build_gltf_shapes, build_shape};
 use super::textures::build_texture;
 use super::transform;
 use super::xml::{Doc, Kind};
 use super::LoadError;
-use crate::{
-    parse_aovs, AovDesc, CameraDesc, ClassicDesc, ClassicShading, EmitterDesc, FilmDesc,
-    FilterDesc, IntegratorDesc, NprDesc, NprStyle, SamplerDesc, SamplingWeights, SceneDescription,
-};
 use glam::{Affine3A, DMat4, DVec3};
 use radia_bsdf::{Bsdf, Texture};
 use radia_sampling::SamplerKind;
+use radia_scene::{
+    parse_aovs, AovDesc, CameraDesc, ClassicDesc, ClassicShading, EmitterDesc, FilmDesc,
+    FilterDesc, IntegratorDesc, NprDesc, NprStyle, SamplerDesc, SamplingWeights, SceneDescription,
+};
 use std::collections::HashMap;
 
 /// State shared by the plugin builders.
@@ -101,6 +101,12 @@ pub(crate) fn build_scene(doc: &Doc) -> Result<(SceneDescription, Vec<String>), 
                 sensors_seen += 1;
                 if sensor.is_none() {
                     sensor = Some(s);
+                }
+            }
+            Kind::Shape if doc.nodes[n].plugin == "gltf" => {
+                for shape in build_gltf_shapes(&mut b, n)? {
+                    shapes.push(shape);
+                    sampling_weights.shapes.push(1.0);
                 }
             }
             Kind::Shape => {

@@ -6,8 +6,8 @@
 //! [`read_rgb_image`] (environment maps) makes grey images RGB; [`read_texture_image`]
 //! keeps one channel for grey images, as Mitsuba's bitmap texture stores `Y` images.
 
-use crate::description::RgbImage;
 use glam::Vec3;
+use radia_scene::description::RgbImage;
 use std::path::Path;
 
 /// The sRGB transfer function inverted: encoded value in [0, 1] to linear.
@@ -23,7 +23,7 @@ pub(crate) fn srgb_to_linear(v: f32) -> f32 {
 /// colour) the scene with NaN.
 pub(crate) fn read_rgb_image(path: &Path) -> Result<RgbImage, String> {
     let bytes =
-        super::read_regular_file(path).map_err(|e| format!("cannot read image file: {e}"))?;
+        crate::read_regular_file(path).map_err(|e| format!("cannot read image file: {e}"))?;
     decode_rgb_image(&bytes)
 }
 
@@ -83,7 +83,7 @@ pub(crate) struct TextureImage {
 pub(crate) fn read_texture_image(path: &Path, raw: bool) -> Result<TextureImage, String> {
     use image::DynamicImage as D;
     let bytes =
-        super::read_regular_file(path).map_err(|e| format!("cannot read image file: {e}"))?;
+        crate::read_regular_file(path).map_err(|e| format!("cannot read image file: {e}"))?;
     if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
         let rgb = read_exr(&bytes)?;
         return Ok(TextureImage {
@@ -174,7 +174,7 @@ fn read_exr(bytes: &[u8]) -> Result<RgbImage, String> {
         let size = h.layer_size;
         let bytes = size.width() as u128 * size.height() as u128 * 12;
         let what = format!("the {}x{} image", size.width(), size.height());
-        crate::memory::check_fits(bytes, &what)?;
+        radia_scene::memory::check_fits(bytes, &what)?;
     }
     let image = read()
         .no_deep_data()

@@ -4,8 +4,8 @@
 //! syntax, `<transform>` composition, ids, `<ref>` and `<alias>`. Nothing here knows what a
 //! plugin does with its properties; that is the builder's job (`build.rs`).
 
-use super::error::{LoadError, TextPos};
 use super::transform;
+use crate::error::{LoadError, TextPos};
 use glam::{DMat4, DVec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -199,7 +199,7 @@ fn nesting_exceeds(text: &str, max: usize) -> Option<usize> {
 
 /// Reads and parses `path`; `defines` act as Mitsuba's `-D name=value`.
 pub(crate) fn parse_file(path: &Path, defines: &[(String, String)]) -> Result<Doc, LoadError> {
-    let bytes = super::read_regular_file(path)
+    let bytes = crate::read_regular_file(path)
         .map_err(|e| LoadError::in_file(path, format!("cannot read scene file: {e}")))?;
     let text = match String::from_utf8(bytes) {
         Ok(t) => t,
@@ -557,7 +557,7 @@ impl<'a, 'x> Parser<'a, 'x> {
                 format!("exceeded the maximum include depth of {MAX_INCLUDE_DEPTH}"),
             ));
         }
-        let bytes = super::read_regular_file(&path).map_err(|e| {
+        let bytes = crate::read_regular_file(&path).map_err(|e| {
             self.err(
                 epos,
                 format!("cannot read included file \"{}\": {e}", path.display()),

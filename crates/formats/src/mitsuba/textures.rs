@@ -7,11 +7,11 @@
 //! shares the decoded image.
 
 use super::build::Builder;
-use super::image::read_texture_image;
 use super::props::Props;
 use super::shapes::resolve_path;
 use super::xml::Kind;
 use super::LoadError;
+use crate::image::read_texture_image;
 use glam::DMat4;
 use radia_bsdf::{Bitmap, Checkerboard, FilterType, Texture, UvTransform, WrapMode};
 
