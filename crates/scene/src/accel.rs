@@ -172,6 +172,13 @@ pub struct Hit {
     pub inner: u32,
 }
 
+/// What the leaf tests found besides the distance: one record, so that the traversal's
+/// callback carries one pointer (as before instances existed).
+struct Found {
+    bary: Vec2,
+    inner: u32,
+}
+
 /// Precomputed per-ray data of the watertight test (Woop, Benthin and Wald 2013, "Watertight
 /// Ray/Triangle Intersection", JCGT 2(1)): the ray is sheared so that it runs along +z, and
 /// edge functions decide inside/outside with a double-precision fallback on exact zeros, so
@@ -531,12 +538,11 @@ impl Accel {
         shapes: &[Shape],
         ray: &Ray,
         any_hit: bool,
-        bary: &mut Vec2,
-        inner: &mut u32,
+        found: &mut Found,
     ) -> Option<(u32, f32)> {
         let all = (1u32 << self.len()) - 1;
         let wray = WatertightRay::new(ray);
-        self.intersect_leaves(shapes, &wray, ray, 0, all, ray.t_max, any_hit, bary, inner)
+        self.intersect_leaves(shapes, &wray, ray, 0, all, ray.t_max, any_hit, found)
     }
 
     /// Runs `f` with a traversal stack deep enough for this BVH: on the call stack for every
@@ -582,8 +588,7 @@ impl Accel {
         mask: u32,
         mut t_max: f32,
         any_hit: bool,
-        bary: &mut Vec2,
-        inner: &mut u32,
+        found: &mut Found,
     ) -> Option<(u32, f32)> {
         let mut best = None;
         let (mut base, mut mask) = (base as usize, mask);
@@ -604,7 +609,7 @@ impl Accel {
                     if h.t[l] < t_max {
                         t_max = h.t[l];
                         best = Some(((base + l) as u32, t_max));
-                        *bary = Vec2::new(h.b1[l], h.b2[l]);
+                        found.bary = Vec2::new(h.b1[l], h.b2[l]);
                     }
                 }
                 let mut one_by_one = analytic | h.exact;
@@ -616,8 +621,8 @@ impl Accel {
                     {
                         t_max = t;
                         best = Some(((base + l) as u32, t));
-                        *bary = b;
-                        *inner = i;
+                        found.bary = b;
+                        found.inner = i;
                     }
                 }
                 if any_hit && best.is_some() {
@@ -688,15 +693,17 @@ impl Accel {
         if self.is_empty() {
             return None;
         }
-        let mut bary = Vec2::ZERO;
-        let mut inner = 0;
+        let mut found = Found {
+            bary: Vec2::ZERO,
+            inner: 0,
+        };
         if self.flat {
-            let (prim, t) = self.intersect_flat(shapes, ray, any_hit, &mut bary, &mut inner)?;
+            let (prim, t) = self.intersect_flat(shapes, ray, any_hit, &mut found)?;
             return Some(Hit {
                 t,
                 prim,
-                bary,
-                inner,
+                bary: found.bary,
+                inner: found.inner,
             });
         }
         let wray = WatertightRay::new(ray);
@@ -709,7 +716,7 @@ impl Accel {
                 any_hit,
                 |base, mask, t_max| {
                     self.intersect_leaves(
-                        shapes, &wray, ray, base, mask, t_max, any_hit, &mut bary, &mut inner,
+                        shapes, &wray, ray, base, mask, t_max, any_hit, &mut found,
                     )
                 },
                 stack,
@@ -718,8 +725,8 @@ impl Accel {
         Some(Hit {
             t,
             prim,
-            bary,
-            inner,
+            bary: found.bary,
+            inner: found.inner,
         })
     }
 
