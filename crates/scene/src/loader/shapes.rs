@@ -273,7 +273,7 @@ fn build_instance(
     };
     let to_world = b.to_world(&mut p)?;
     let det = DMat3::from_mat4(to_world).determinant();
-    if !(det.abs() > 0.0) || !det.is_finite() {
+    if det == 0.0 || !det.is_finite() {
         return Err(p.err("instance: the to_world transform is singular or not finite"));
     }
     p.finish()?;
