@@ -152,6 +152,24 @@ CASES = [
     ("envmap-scale-nan.xml", "envmap-scale-nan.xml:", scene('    <emitter type="envmap">\n        <string name="filename" value="../../scenes/textures/sky-sun.exr"/>\n        <float name="scale" value="nan"/>\n    </emitter>\n')),
     ("displacement-subdivisions-huge.xml", "displacement-subdivisions-huge.xml:8:5", scene('    <shape type="cube">\n        <integer name="subdivisions" value="16"/>\n    </shape>\n')),
     ("displacement-scale-nan.xml", "displacement-scale-nan.xml:10:9", scene('    <shape type="rectangle">\n        <float name="displacement" value="0.5"/>\n        <float name="displacement_scale" value="nan"/>\n    </shape>\n')),
+    # ---- instancing (src/shapes/shapegroup.cpp, instance.cpp) ----
+    ("instance-missing-group.xml", "instance-missing-group.xml:9:9",
+     scene('    <shape type="instance">\n        <ref id="no_such_group"/>\n    </shape>\n')),
+    ("instance-not-a-group.xml", "instance-not-a-group.xml:10:9",
+     scene('    <shape type="sphere" id="ball"/>\n    <shape type="instance">\n        <ref id="ball"/>\n    </shape>\n')),
+    ("instance-without-group.xml", "instance-without-group.xml:8:5", scene('    <shape type="instance"/>\n')),
+    ("shapegroup-emitter.xml", "shapegroup-emitter.xml:9:9",
+     scene('    <shape type="shapegroup" id="g">\n        <shape type="sphere">\n            <emitter type="area"/>\n'
+           '        </shape>\n    </shape>\n    <shape type="instance">\n        <ref id="g"/>\n    </shape>\n')),
+    ("shapegroup-nested.xml", "shapegroup-nested.xml:9:9",
+     scene('    <shape type="shapegroup" id="g">\n        <shape type="shapegroup" id="h">\n            <shape type="sphere"/>\n'
+           '        </shape>\n    </shape>\n')),
+    ("shapegroup-instance-inside.xml", "shapegroup-instance-inside.xml:12:9",
+     scene('    <shape type="shapegroup" id="g">\n        <shape type="sphere"/>\n    </shape>\n'
+           '    <shape type="shapegroup" id="h">\n        <shape type="instance">\n            <ref id="g"/>\n'
+           '        </shape>\n    </shape>\n')),
+    ("shapegroup-bsdf.xml", "shapegroup-bsdf.xml:9:9",
+     scene('    <shape type="shapegroup" id="g">\n        <bsdf type="diffuse"/>\n        <shape type="sphere"/>\n    </shape>\n')),
     # ---- glTF (written by gltf_files()) ----
     ("gltf-truncated.gltf", "gltf-truncated.gltf", '{"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0'),
     ("glb-bad-magic.glb", "glb-bad-magic.glb", None),  # written by data_files()

@@ -49,6 +49,7 @@ fn furnace_scene(albedo: f32, max_depth: i32, filter: FilterDesc) -> Scene {
             emission: None,
             origin: "test".into(),
         }],
+        shape_groups: Vec::new(),
         world_origin: glam::DVec3::ZERO,
         emitters: vec![EmitterDesc::Constant {
             radiance: Vec3::ONE,

@@ -73,6 +73,7 @@ fn scene(bsdf: Bsdf, spp: u32) -> Scene {
             emission: None,
             origin: "furnace sphere".into(),
         }],
+        shape_groups: Vec::new(),
         world_origin: glam::DVec3::ZERO,
         emitters: vec![EmitterDesc::Constant {
             radiance: Vec3::ONE,

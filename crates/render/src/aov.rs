@@ -93,7 +93,8 @@ impl<'a> AovIntegrator<'a> {
                         dst.copy_from_slice(&a.to_array());
                     }
                     AovKind::PrimIndex => dst[0] = si.face as f32,
-                    AovKind::ShapeIndex => dst[0] = (si.shape + 1) as f32,
+                    // Mitsuba's `aov.cpp`: the instance's place when the hit came through one.
+                    AovKind::ShapeIndex => dst[0] = (si.instance.unwrap_or(si.shape) + 1) as f32,
                 }
             }
             k += n;

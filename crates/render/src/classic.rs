@@ -131,9 +131,13 @@ impl<'a> ClassicIntegrator<'a> {
         sampler: &mut SampleStream<'_, S>,
         stats: &mut PathStats,
     ) -> Spectrum {
+        // An instanced mesh's vertices are in its group's space: shaded per pixel.
         let ShapeKind::Mesh(mesh) = &scene.shapes[si.shape as usize].kind else {
             return self.local(scene, si, depth, sampler, stats);
         };
+        if si.instance.is_some() {
+            return self.local(scene, si, depth, sampler, stats);
+        }
         if self.desc.shading == ClassicShading::Phong {
             return self.local(scene, si, depth, sampler, stats);
         }

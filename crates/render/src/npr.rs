@@ -151,7 +151,7 @@ impl<'a> NprIntegrator<'a> {
 
     fn discontinuous(&self, scene: &Scene, a: &SurfaceInteraction, b: &SurfaceInteraction) -> bool {
         let material = |s: &SurfaceInteraction| scene.shapes[s.shape as usize].bsdf;
-        if a.shape != b.shape || material(a) != material(b) {
+        if (a.instance, a.shape) != (b.instance, b.shape) || material(a) != material(b) {
             return true;
         }
         let off_plane = (b.p - a.p).dot(a.n).abs();

@@ -83,6 +83,7 @@ static MILLION: LazyLock<Bench> = LazyLock::new(|| {
         },
         sampler: SamplerDesc::default(),
         shapes,
+        shape_groups: Vec::new(),
         emitters: Vec::new(),
         world_origin: glam::DVec3::ZERO,
         sampling_weights: Default::default(),

@@ -4,7 +4,7 @@
 mod chunked;
 mod wide;
 
-use crate::shape::{Shape, ShapeKind};
+use crate::shape::{Instance, Shape, ShapeKind};
 use glam::{UVec2, Vec2, Vec3};
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::cwbvh::{bvh2_to_cwbvh::bvh2_to_cwbvh, CwBvh};
@@ -31,6 +31,11 @@ pub enum Primitive {
     Disk {
         shape: u32,
     },
+    /// An instance of a shape group: what it hit is [`Hit::inner`], a primitive of the
+    /// group's own BVH ([`Accel::group`]).
+    Instance {
+        shape: u32,
+    },
 }
 
 impl Primitive {
@@ -38,7 +43,8 @@ impl Primitive {
         match *self {
             Primitive::Triangle { shape, .. }
             | Primitive::Sphere { shape, .. }
-            | Primitive::Disk { shape } => shape,
+            | Primitive::Disk { shape }
+            | Primitive::Instance { shape } => shape,
         }
     }
 }
@@ -114,16 +120,39 @@ fn analytic_bounds(shape: &Shape) -> Aabb {
             }
             aabb
         }
+        ShapeKind::Instance(instance) => {
+            Aabb::new(instance.bounds[0].into(), instance.bounds[1].into())
+        }
         ShapeKind::Mesh(_) => Aabb::INVALID,
     }
 }
 
-/// Bounds of primitive `i` in scene order (`first[s]`: the number of shape s's first one).
-fn scene_primitive_bounds(shapes: &[Shape], first: &[u32], i: u32) -> Bounded {
-    let si = first.partition_point(|&f| f <= i) - 1;
+/// Bounds of shape `shape` (a mesh: of its vertices), as (min, max); inverted (min > max)
+/// when it has none. What a shape group's bounds are made of.
+pub(crate) fn shape_bounds(shape: &Shape) -> [Vec3; 2] {
+    match &shape.kind {
+        ShapeKind::Mesh(mesh) => mesh.indices.iter().flatten().fold(
+            [Vec3::INFINITY, Vec3::NEG_INFINITY],
+            |[lo, hi], &v| {
+                let p = mesh.positions[v as usize];
+                [lo.min(p), hi.max(p)]
+            },
+        ),
+        _ => {
+            let b = analytic_bounds(shape);
+            [b.min.into(), b.max.into()]
+        }
+    }
+}
+
+/// Bounds of primitive `i` in the order of `members` (`first[k]`: the number of the first
+/// primitive of shape `members[k]`).
+fn scene_primitive_bounds(shapes: &[Shape], members: &[u32], first: &[u32], i: u32) -> Bounded {
+    let k = first.partition_point(|&f| f <= i) - 1;
+    let si = members[k] as usize;
     Bounded(match &shapes[si].kind {
         ShapeKind::Mesh(mesh) => {
-            let face = (i - first[si]) as usize;
+            let face = (i - first[k]) as usize;
             triangle_bounds(mesh.indices[face].map(|v| mesh.positions[v as usize]))
         }
         _ => analytic_bounds(&shapes[si]),
@@ -136,8 +165,18 @@ pub struct Hit {
     pub t: f32,
     /// Index of the primitive in BVH order ([`Accel::primitive`]).
     pub prim: u32,
-    /// Triangle: barycentrics (b1, b2) of vertices 1 and 2. Analytic shapes: unused.
+    /// Triangle: barycentrics (b1, b2) of vertices 1 and 2, also of an instance's triangle.
+    /// Analytic shapes: unused.
     pub bary: Vec2,
+    /// Of an instance: the primitive hit in its group's BVH (unused otherwise).
+    pub inner: u32,
+}
+
+/// What the leaf tests found besides the distance: one record, so that the traversal's
+/// callback carries one pointer (as before instances existed).
+struct Found {
+    bary: Vec2,
+    inner: u32,
 }
 
 /// Precomputed per-ray data of the watertight test (Woop, Benthin and Wald 2013, "Watertight
@@ -299,6 +338,11 @@ pub struct Accel {
     /// With a handful of primitives the box tests of a traversal cost more than they save:
     /// every query tests them all directly ([`Accel::FLAT_MAX`]).
     flat: bool,
+    /// The bottom level of a two-level structure: one BVH per shape group, over the group's
+    /// shapes in the group's space, built once however many instances place it. Instances
+    /// are primitives of this (top-level) BVH, tested one at a time like analytic shapes, so
+    /// a scene without instances never reaches this code. Empty in a group's own BVH.
+    groups: Vec<Accel>,
 }
 
 impl Accel {
@@ -308,16 +352,58 @@ impl Accel {
 
     /// [`Accel::build`], but with scenes of more than `chunked_above` primitives built in
     /// eight parts ([`chunked`]); public so that tests can exercise that path on small scenes.
+    ///
+    /// The shapes of shape groups ([`Shape::group`]) get a BVH per group, and the top level
+    /// is built over the other shapes (instances included).
     #[doc(hidden)]
     pub fn build_with_chunks(shapes: &[Shape], chunked_above: usize) -> Self {
-        // Primitives are numbered shape by shape (a mesh's triangles in face order); `first[s]`
-        // is the number of shape s's first one.
-        let mut first = Vec::with_capacity(shapes.len() + 1);
+        let group_count = shapes
+            .iter()
+            .filter_map(|s| s.group)
+            .max()
+            .map_or(0, |g| g as usize + 1);
+        if group_count == 0 {
+            let all: Vec<u32> = (0..shapes.len() as u32).collect();
+            return Self::build_members(shapes, &all, chunked_above, Vec::new());
+        }
+        let mut members = vec![Vec::new(); group_count + 1];
+        for (i, s) in shapes.iter().enumerate() {
+            let g = s.group.map_or(group_count, |g| g as usize);
+            members[g].push(i as u32);
+        }
+        let top = members.pop().expect("the top level's list");
+        let groups = members
+            .iter()
+            .map(|m| Self::build_members(shapes, m, chunked_above, Vec::new()))
+            .collect();
+        Self::build_members(shapes, &top, chunked_above, groups)
+    }
+
+    /// The BVH over the shapes `members` (indices into `shapes`), whose instances refer to
+    /// `groups`.
+    fn build_members(
+        shapes: &[Shape],
+        members: &[u32],
+        chunked_above: usize,
+        groups: Vec<Accel>,
+    ) -> Self {
+        // Primitives are numbered shape by shape (a mesh's triangles in face order); `first[k]`
+        // is the number of shape members[k]'s first one.
+        let mut first = Vec::with_capacity(members.len() + 1);
         let mut total = 0usize;
-        for shape in shapes {
+        for &si in members {
             first.push(total as u32);
-            total += match &shape.kind {
+            total += match &shapes[si as usize].kind {
                 ShapeKind::Mesh(mesh) => mesh.indices.len(),
+                ShapeKind::Instance(instance) => {
+                    let group = groups.get(instance.group as usize);
+                    assert!(
+                        group.is_some(),
+                        "an instance of a group that does not exist"
+                    );
+                    // An empty group is nothing to hit (Mitsuba: an invalid bounding box).
+                    !group.is_some_and(Accel::is_empty) as usize
+                }
                 _ => 1,
             };
         }
@@ -334,20 +420,25 @@ impl Accel {
                 analytic: None,
                 depth: 0,
                 flat: false,
+                groups,
             };
         }
         let bvh = if total > chunked_above {
-            chunked::build(total, |i| scene_primitive_bounds(shapes, &first, i))
+            chunked::build(total, |i| {
+                scene_primitive_bounds(shapes, members, &first, i)
+            })
         } else {
             // Bounds are made in parallel, shape by shape.
             let mut bounds = Vec::with_capacity(total);
-            for shape in shapes {
+            for (k, &si) in members.iter().enumerate() {
+                let shape = &shapes[si as usize];
                 match &shape.kind {
                     ShapeKind::Mesh(mesh) => {
                         bounds.par_extend(mesh.indices.par_iter().map(|idx| {
                             Bounded(triangle_bounds(idx.map(|i| mesh.positions[i as usize])))
                         }))
                     }
+                    _ if first[k] == first[k + 1] => {} // an instance of an empty group
                     _ => bounds.push(Bounded(analytic_bounds(shape))),
                 }
             }
@@ -361,8 +452,8 @@ impl Accel {
         let owners: Vec<[u32; 2]> = std::mem::take(&mut bvh.primitive_indices)
             .into_par_iter()
             .map(|i| {
-                let si = first.partition_point(|&f| f <= i) - 1;
-                [si as u32, i - first[si]]
+                let k = first.partition_point(|&f| f <= i) - 1;
+                [members[k], i - first[k]]
             })
             .collect();
         let lanes =
@@ -375,18 +466,15 @@ impl Accel {
                 },
             ));
         let is_analytic = |si: u32| !matches!(shapes[si as usize].kind, ShapeKind::Mesh(_));
-        let analytic = shapes
-            .iter()
-            .any(|s| !matches!(s.kind, ShapeKind::Mesh(_)))
-            .then(|| {
-                let mut bits = vec![0u64; total / 64 + 2];
-                for (i, &[si, _]) in owners.iter().enumerate() {
-                    if is_analytic(si) {
-                        bits[i / 64] |= 1 << (i % 64);
-                    }
+        let analytic = members.iter().any(|&si| is_analytic(si)).then(|| {
+            let mut bits = vec![0u64; total / 64 + 2];
+            for (i, &[si, _]) in owners.iter().enumerate() {
+                if is_analytic(si) {
+                    bits[i / 64] |= 1 << (i % 64);
                 }
-                bits
-            });
+            }
+            bits
+        });
         let flat = total <= Self::FLAT_MAX;
         Self {
             bvh,
@@ -395,7 +483,13 @@ impl Accel {
             analytic,
             depth,
             flat,
+            groups,
         }
+    }
+
+    /// The BVH of shape group `group` (over its shapes, in its space).
+    pub fn group(&self, group: u32) -> &Accel {
+        &self.groups[group as usize]
     }
 
     /// Number of primitives (triangles and analytic shapes).
@@ -424,6 +518,7 @@ impl Accel {
                 shape,
             },
             ShapeKind::Disk { .. } => Primitive::Disk { shape },
+            ShapeKind::Instance(_) => Primitive::Instance { shape },
         }
     }
 
@@ -443,11 +538,11 @@ impl Accel {
         shapes: &[Shape],
         ray: &Ray,
         any_hit: bool,
-        bary: &mut Vec2,
+        found: &mut Found,
     ) -> Option<(u32, f32)> {
         let all = (1u32 << self.len()) - 1;
         let wray = WatertightRay::new(ray);
-        self.intersect_leaves(shapes, &wray, ray, 0, all, ray.t_max, any_hit, bary)
+        self.intersect_leaves(shapes, &wray, ray, 0, all, ray.t_max, any_hit, found)
     }
 
     /// Runs `f` with a traversal stack deep enough for this BVH: on the call stack for every
@@ -478,8 +573,9 @@ impl Accel {
     }
 
     /// The closest hit before `t_max` among the primitives `base + i` for the bits i of `mask`
-    /// (with `any_hit`, the first found), with its barycentrics in `bary`. Triangles are
-    /// tested eight at a time; analytic shapes, and triangles whose single-precision edge
+    /// (with `any_hit`, the first found), with its barycentrics in `bary` (and, for an
+    /// instance, the primitive of its group in `inner`). Triangles are tested eight at a
+    /// time; analytic shapes and instances, and triangles whose single-precision edge
     /// functions were exactly zero, one at a time.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
@@ -492,7 +588,7 @@ impl Accel {
         mask: u32,
         mut t_max: f32,
         any_hit: bool,
-        bary: &mut Vec2,
+        found: &mut Found,
     ) -> Option<(u32, f32)> {
         let mut best = None;
         let (mut base, mut mask) = (base as usize, mask);
@@ -513,17 +609,20 @@ impl Accel {
                     if h.t[l] < t_max {
                         t_max = h.t[l];
                         best = Some(((base + l) as u32, t_max));
-                        *bary = Vec2::new(h.b1[l], h.b2[l]);
+                        found.bary = Vec2::new(h.b1[l], h.b2[l]);
                     }
                 }
                 let mut one_by_one = analytic | h.exact;
                 while one_by_one != 0 {
                     let l = one_by_one.trailing_zeros() as usize;
                     one_by_one &= one_by_one - 1;
-                    if let Some((t, b)) = self.intersect_prim(shapes, wray, ray, base + l, t_max) {
+                    if let Some((t, b, i)) =
+                        self.intersect_prim(shapes, wray, ray, base + l, t_max, any_hit)
+                    {
                         t_max = t;
                         best = Some(((base + l) as u32, t));
-                        *bary = b;
+                        found.bary = b;
+                        found.inner = i;
                     }
                 }
                 if any_hit && best.is_some() {
@@ -536,6 +635,9 @@ impl Accel {
         best
     }
 
+    /// The exact test of primitive `prim` before `t_max`: (t, barycentrics, the primitive
+    /// of an instance's group that was hit). With `any_hit`, an instance reports the first
+    /// hit its group's traversal finds.
     #[inline(always)]
     fn intersect_prim(
         &self,
@@ -544,31 +646,65 @@ impl Accel {
         ray: &Ray,
         prim: usize,
         t_max: f32,
-    ) -> Option<(f32, Vec2)> {
-        let triangle = |p: &[Vec3; 3]| {
-            wray.intersect(p, t_max)
-                .map(|(t, b1, b2)| (t, Vec2::new(b1, b2)))
-        };
+        any_hit: bool,
+    ) -> Option<(f32, Vec2, u32)> {
         let shape = &shapes[self.owners[prim][0] as usize];
         match &shape.kind {
-            ShapeKind::Mesh(_) => triangle(&self.lanes.triangle(prim)),
+            ShapeKind::Mesh(_) => wray
+                .intersect(&self.lanes.triangle(prim), t_max)
+                .map(|(t, b1, b2)| (t, Vec2::new(b1, b2), 0)),
             ShapeKind::Sphere { center, radius, .. } => {
-                intersect_sphere(ray, *center, *radius, t_max).map(|t| (t, Vec2::ZERO))
+                intersect_sphere(ray, *center, *radius, t_max).map(|t| (t, Vec2::ZERO, 0))
             }
-            ShapeKind::Disk { .. } => intersect_disk(ray, shape, t_max).map(|t| (t, Vec2::ZERO)),
+            ShapeKind::Disk { .. } => intersect_disk(ray, shape, t_max).map(|t| (t, Vec2::ZERO, 0)),
+            ShapeKind::Instance(instance) => {
+                self.intersect_instance(shapes, instance, ray, t_max, any_hit)
+            }
         }
     }
 
-    /// Closest hit along `ray` in (0, ray.t_max).
-    #[inline]
-    pub fn intersect(&self, shapes: &[Shape], ray: &Ray) -> Option<Hit> {
+    /// `ray` against an instance: moved into its group's space (t is unchanged: the
+    /// direction is moved too, not renormalised), then traced against the group's BVH.
+    /// Out of line, so that the top level's loop stays as it is for scenes without instances.
+    #[inline(never)]
+    fn intersect_instance(
+        &self,
+        shapes: &[Shape],
+        instance: &Instance,
+        ray: &Ray,
+        t_max: f32,
+        any_hit: bool,
+    ) -> Option<(f32, Vec2, u32)> {
+        let local = instance.local_ray(ray, t_max);
+        let group = &self.groups[instance.group as usize];
+        let hit = if any_hit {
+            group.query::<true>(shapes, &local)
+        } else {
+            group.query::<false>(shapes, &local)
+        }?;
+        Some((hit.t, hit.bary, hit.prim))
+    }
+
+    /// The closest (with `ANY_HIT`, the first found) hit along `ray` in (0, ray.t_max);
+    /// a constant, so that closest-hit and occlusion queries are each compiled for their own.
+    #[inline(always)]
+    fn query<const ANY_HIT: bool>(&self, shapes: &[Shape], ray: &Ray) -> Option<Hit> {
+        let any_hit = ANY_HIT;
         if self.is_empty() {
             return None;
         }
-        let mut bary = Vec2::ZERO;
+        let mut found = Found {
+            bary: Vec2::ZERO,
+            inner: 0,
+        };
         if self.flat {
-            let (prim, t) = self.intersect_flat(shapes, ray, false, &mut bary)?;
-            return Some(Hit { t, prim, bary });
+            let (prim, t) = self.intersect_flat(shapes, ray, any_hit, &mut found)?;
+            return Some(Hit {
+                t,
+                prim,
+                bary: found.bary,
+                inner: found.inner,
+            });
         }
         let wray = WatertightRay::new(ray);
         let node_ray = wide::NodeRay::new(ray.o, ray.d);
@@ -577,41 +713,33 @@ impl Accel {
                 &self.bvh,
                 &node_ray,
                 ray.t_max,
-                false,
+                any_hit,
                 |base, mask, t_max| {
-                    self.intersect_leaves(shapes, &wray, ray, base, mask, t_max, false, &mut bary)
+                    self.intersect_leaves(
+                        shapes, &wray, ray, base, mask, t_max, any_hit, &mut found,
+                    )
                 },
                 stack,
             )
         })?;
-        Some(Hit { t, prim, bary })
+        Some(Hit {
+            t,
+            prim,
+            bary: found.bary,
+            inner: found.inner,
+        })
+    }
+
+    /// Closest hit along `ray` in (0, ray.t_max).
+    #[inline]
+    pub fn intersect(&self, shapes: &[Shape], ray: &Ray) -> Option<Hit> {
+        self.query::<false>(shapes, ray)
     }
 
     /// True when something blocks `ray` in (0, ray.t_max). Stops at the first hit.
     #[inline]
     pub fn occluded(&self, shapes: &[Shape], ray: &Ray) -> bool {
-        if self.is_empty() {
-            return false;
-        }
-        let mut bary = Vec2::ZERO;
-        if self.flat {
-            return self.intersect_flat(shapes, ray, true, &mut bary).is_some();
-        }
-        let wray = WatertightRay::new(ray);
-        let node_ray = wide::NodeRay::new(ray.o, ray.d);
-        self.with_stack(|stack| {
-            wide::traverse(
-                &self.bvh,
-                &node_ray,
-                ray.t_max,
-                true,
-                |base, mask, t_max| {
-                    self.intersect_leaves(shapes, &wray, ray, base, mask, t_max, true, &mut bary)
-                },
-                stack,
-            )
-        })
-        .is_some()
+        self.query::<true>(shapes, ray).is_some()
     }
 
     /// The exact test of one primitive (BVH order, [`Accel::primitive`]) against `ray`.
@@ -621,7 +749,15 @@ impl Accel {
         ray: &Ray,
         prim: usize,
     ) -> Option<(f32, Vec2)> {
-        self.intersect_prim(shapes, &WatertightRay::new(ray), ray, prim, ray.t_max)
+        self.intersect_prim(
+            shapes,
+            &WatertightRay::new(ray),
+            ray,
+            prim,
+            ray.t_max,
+            false,
+        )
+        .map(|(t, b, _)| (t, b))
     }
 
     /// Bounding boxes of the primitives (BVH order) as (min, max), for
@@ -639,6 +775,10 @@ impl Accel {
                         let e = to_world.matrix3.x_axis.abs() + to_world.matrix3.y_axis.abs();
                         [c - Vec3::from(e), c + Vec3::from(e)]
                     }
+                    _ => [Vec3::splat(f32::MIN), Vec3::splat(f32::MAX)],
+                },
+                Primitive::Instance { shape } => match &shapes[*shape as usize].kind {
+                    ShapeKind::Instance(instance) => instance.bounds,
                     _ => [Vec3::splat(f32::MIN), Vec3::splat(f32::MAX)],
                 },
             })
@@ -668,12 +808,24 @@ impl Accel {
             if near > far || far < 0.0 || near > t_max {
                 continue;
             }
-            if let Some((t, bary)) = self.intersect_prim(shapes, &wray, ray, prim, t_max) {
+            let found = match &shapes[self.owners[prim][0] as usize].kind {
+                // An instance: its group by brute force too, in the group's space.
+                ShapeKind::Instance(instance) => {
+                    let group = &self.groups[instance.group as usize];
+                    let local = instance.local_ray(ray, t_max);
+                    group
+                        .intersect_brute_force(shapes, &group.primitive_bounds(shapes), &local)
+                        .map(|h| (h.t, h.bary, h.prim))
+                }
+                _ => self.intersect_prim(shapes, &wray, ray, prim, t_max, false),
+            };
+            if let Some((t, bary, inner)) = found {
                 t_max = t;
                 best = Some(Hit {
                     t,
                     prim: prim as u32,
                     bary,
+                    inner,
                 });
             }
         }

@@ -197,6 +197,13 @@ pub enum Geometry {
         to_world: Affine3A,
         flip_normals: bool,
     },
+    /// Mitsuba's `instance` (`src/shapes/instance.cpp`): shape group `group` of
+    /// [`SceneDescription::shape_groups`] placed by `to_world`. Its shapes keep their own
+    /// materials; the instance's `bsdf` and `emission` are unused (an instance has neither).
+    Instance {
+        group: u32,
+        to_world: Affine3A,
+    },
 }
 
 /// A shape with its material and, if it glows, its `area` emitter.
@@ -277,7 +284,13 @@ pub struct SceneDescription {
     pub camera: CameraDesc,
     pub film: FilmDesc,
     pub sampler: SamplerDesc,
+    /// The scene's shapes in file order (Mitsuba's `Scene::shapes()`: instances included,
+    /// shape groups not), the order `shape_index` counts.
     pub shapes: Vec<ShapeDesc>,
+    /// Mitsuba's `shapegroup`s (`src/shapes/shapegroup.cpp`): shapes in the group's own
+    /// space, rendered only through the [`Geometry::Instance`]s that place them. Never an
+    /// emitter, an instance or another group (refused by the loader, as by Mitsuba).
+    pub shape_groups: Vec<Vec<ShapeDesc>>,
     pub emitters: Vec<EmitterDesc>,
     /// Where render space's origin lies in the file's world coordinates. The loaders place
     /// the camera at the origin (positions are f32, whose spacing grows with distance from

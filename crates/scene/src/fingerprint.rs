@@ -23,14 +23,24 @@ impl SceneDescription {
             "{:?}|{:?}|{:?}|{:?}|",
             self.integrator, self.camera, self.film, self.sampler
         );
-        for shape in &self.shapes {
+        let hash_shape = |h: &mut Hasher, shape: &crate::ShapeDesc| {
             match &shape.geometry {
-                Geometry::Mesh(mesh) => hash_mesh(&mut h, mesh),
+                Geometry::Mesh(mesh) => hash_mesh(h, mesh),
                 other => {
                     let _ = write!(h, "{other:?}");
                 }
             }
             let _ = write!(h, "|{:?}|{:?}|", shape.bsdf, shape.emission);
+        };
+        for shape in &self.shapes {
+            hash_shape(&mut h, shape);
+        }
+        // Absent without shape groups, so such scenes keep their fingerprints.
+        for (g, group) in self.shape_groups.iter().enumerate() {
+            let _ = write!(h, "group {g}|");
+            for shape in group {
+                hash_shape(&mut h, shape);
+            }
         }
         for emitter in &self.emitters {
             match emitter {

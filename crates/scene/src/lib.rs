@@ -13,11 +13,12 @@ pub mod memory;
 pub mod shape;
 mod spherical;
 
-pub use accel::Accel;
+pub use accel::{Accel, Hit};
 pub use camera::{look_at, Camera};
 pub use description::*;
 pub use emitter::{Emitter, EmitterSample};
 pub use lights::{LightContext, LightSamplerKind, Lights};
+use shape::ShapeKind;
 pub use shape::{Shape, SurfaceInteraction};
 
 use glam::Vec3;
@@ -73,6 +74,27 @@ impl Scene {
             bsdfs.push(s.bsdf);
             shapes.push(Shape::new(s.geometry, i as u32, emitter));
         }
+        // The shape groups' shapes after the scene's own (so that a shape's index among the
+        // scene's shapes is its place in the file, as `shape_index` counts), each with its
+        // own material; their bounds, in the group's space, bound the instances.
+        let mut group_bounds = Vec::with_capacity(desc.shape_groups.len());
+        for (g, group) in desc.shape_groups.into_iter().enumerate() {
+            let mut bounds = [Vec3::INFINITY, Vec3::NEG_INFINITY];
+            for s in group {
+                let mut shape = Shape::new(s.geometry, bsdfs.len() as u32, None);
+                shape.group = Some(g as u32);
+                let [lo, hi] = accel::shape_bounds(&shape);
+                bounds = [bounds[0].min(lo), bounds[1].max(hi)];
+                bsdfs.push(s.bsdf);
+                shapes.push(shape);
+            }
+            group_bounds.push(bounds);
+        }
+        for shape in &mut shapes {
+            if let shape::ShapeKind::Instance(instance) = &mut shape.kind {
+                instance.bounds = instance.world_bounds(group_bounds[instance.group as usize]);
+            }
+        }
         let mut environment = None;
         for (j, e) in desc.emitters.iter().enumerate() {
             sampling_weights.push(desc.sampling_weights.emitter(j));
@@ -117,7 +139,30 @@ impl Scene {
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceInteraction> {
         let hit = self.accel.intersect(&self.shapes, ray)?;
         let prim = self.accel.primitive(&self.shapes, hit.prim as usize);
+        if let accel::Primitive::Instance { shape } = prim {
+            return Some(self.instance_interaction(shape, &hit, ray));
+        }
         Some(self.shapes[prim.shape() as usize].interaction(&hit, &prim, ray.o, ray.d))
+    }
+
+    /// The interaction at `hit` on instance `instance`: found in its group's space, with the
+    /// very ray its traversal traced there, and moved back to world space.
+    #[inline(never)]
+    fn instance_interaction(&self, instance: u32, hit: &Hit, ray: &Ray) -> SurfaceInteraction {
+        let ShapeKind::Instance(inst) = &self.shapes[instance as usize].kind else {
+            unreachable!("an instance primitive belongs to an instance");
+        };
+        let local = inst.local_ray(ray, ray.t_max);
+        let group = self.accel.group(inst.group);
+        let prim = group.primitive(&self.shapes, hit.inner as usize);
+        let inner = Hit {
+            t: hit.t,
+            prim: hit.inner,
+            bary: hit.bary,
+            inner: 0,
+        };
+        let si = self.shapes[prim.shape() as usize].interaction(&inner, &prim, local.o, local.d);
+        inst.to_world(&si, ray.d, instance)
     }
 
     /// True when something blocks `ray` before `ray.t_max`.

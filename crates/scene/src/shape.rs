@@ -5,9 +5,9 @@
 use crate::accel::{Hit, Primitive};
 use crate::description::{Geometry, Mesh};
 use crate::spherical::{sample_spherical_triangle, triangle_solid_angle};
-use glam::{Affine3A, Vec2, Vec3};
+use glam::{Affine3A, Mat3A, Vec2, Vec3};
 use radia_math::float::gamma;
-use radia_math::{Frame, INV_TWO_PI, PI};
+use radia_math::{Frame, Ray, INV_TWO_PI, PI};
 use radia_sampling::warp;
 
 #[derive(Clone, Debug)]
@@ -24,6 +24,29 @@ pub enum ShapeKind {
         normal: Vec3,
         flip_normals: bool,
     },
+    /// Mitsuba's `instance`: shape group `group` (the shapes whose [`Shape::group`] it is)
+    /// placed by `to_world`. Rays are moved into the group's space and traced against the
+    /// group's own BVH; the hit is moved back ([`crate::Scene::intersect`]).
+    Instance(Box<Instance>),
+}
+
+/// The transforms of an instance, precomputed once.
+#[derive(Clone, Debug)]
+pub struct Instance {
+    pub group: u32,
+    pub to_world: Affine3A,
+    pub to_local: Affine3A,
+    /// The inverse transpose of `to_world`'s linear part: how normals transform.
+    pub normal_matrix: Mat3A,
+    /// |to_world| · |to_local| componentwise: how rounding in the ray's move to the group's
+    /// space shows in world space (bounded for rotations and scales, larger with shear).
+    pub condition: Mat3A,
+    /// The transform mirrors: the parametrisation's orientation flips (Mitsuba's
+    /// `frame_flipped ^= det < 0`, `src/shapes/instance.cpp`).
+    pub mirrors: bool,
+    /// World-space bounds of the group's bounds' eight corners, (min, max); set by
+    /// [`crate::Scene::build`] once the group's shapes exist (empty until then).
+    pub bounds: [Vec3; 2],
 }
 
 /// A shape of the scene with the indices of its BSDF and emitter.
@@ -32,6 +55,10 @@ pub struct Shape {
     pub kind: ShapeKind,
     pub bsdf: u32,
     pub emitter: Option<u32>,
+    /// The shape group this shape belongs to (Mitsuba's `shapegroup`): then it lives in the
+    /// group's space, is not part of the scene on its own, and is only seen through the
+    /// instances of the group. `None` for the scene's own shapes.
+    pub group: Option<u32>,
     /// Total surface area.
     pub area: f32,
     /// Of an emitting mesh, what light sampling needs of each triangle, made once here
@@ -92,6 +119,10 @@ pub struct SurfaceInteraction {
     pub dp_du: Vec3,
     pub dp_dv: Vec3,
     pub shape: u32,
+    /// The instance the hit shape was reached through (its index among the shapes), if any:
+    /// `shape` is then a member of its group, in the group's space, and every other field is
+    /// in world space.
+    pub instance: Option<u32>,
     /// Triangle index within a mesh (0 on analytic shapes): which light primitive of an
     /// emitting shape was hit.
     pub face: u32,
@@ -162,6 +193,21 @@ impl Shape {
                     area,
                 )
             }
+            Geometry::Instance { group, to_world } => {
+                let to_local = to_world.inverse();
+                let abs =
+                    |m: Mat3A| Mat3A::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
+                let instance = Instance {
+                    group,
+                    to_world,
+                    to_local,
+                    normal_matrix: to_local.matrix3.transpose(),
+                    condition: abs(to_world.matrix3) * abs(to_local.matrix3),
+                    mirrors: to_world.matrix3.determinant() < 0.0,
+                    bounds: [Vec3::INFINITY, Vec3::NEG_INFINITY],
+                };
+                (ShapeKind::Instance(Box::new(instance)), 0.0)
+            }
         };
         let light_triangles = match (&kind, emitter) {
             (ShapeKind::Mesh(mesh), Some(_)) => (0..mesh.indices.len() as u32)
@@ -173,6 +219,7 @@ impl Shape {
             kind,
             bsdf,
             emitter,
+            group: None,
             area,
             light_triangles,
         }
@@ -335,6 +382,7 @@ impl Shape {
             dp_du: dpdu,
             dp_dv: dpdv,
             shape: prim.shape(),
+            instance: None,
             face,
             wi: frame.to_local(-d),
         }
@@ -381,6 +429,7 @@ impl Shape {
                 }
                 Vec2::new(r, v)
             }
+            ShapeKind::Instance(_) => unreachable!("an instance is never an emitter"),
         }
     }
 
@@ -446,6 +495,7 @@ impl Shape {
                     pdf: 1.0 / self.area,
                 }
             }
+            ShapeKind::Instance(_) => unreachable!("an instance is never an emitter"),
         }
     }
 
@@ -488,7 +538,7 @@ impl Shape {
                     });
                 }
             }
-            ShapeKind::Disk { .. } => {}
+            ShapeKind::Disk { .. } | ShapeKind::Instance(_) => {}
         }
         let ps = self.sample_position(face, u);
         let delta = ps.p - ref_p;
@@ -520,7 +570,7 @@ impl Shape {
                     return 1.0 / omega;
                 }
             }
-            ShapeKind::Disk { .. } => {}
+            ShapeKind::Disk { .. } | ShapeKind::Instance(_) => {}
         }
         let delta = p - ref_p;
         let dist2 = delta.length_squared();
@@ -531,6 +581,91 @@ impl Shape {
         } else {
             0.0
         }
+    }
+}
+
+impl Instance {
+    /// `ray` in the group's space, up to `t_max` (the same parameter: the direction is not
+    /// renormalised). Every query moves a ray by this one function, so that a hit found by
+    /// the traversal is found again, bit for bit, when its interaction is computed.
+    #[inline]
+    pub fn local_ray(&self, ray: &Ray, t_max: f32) -> Ray {
+        Ray::new(
+            self.to_local.transform_point3(ray.o),
+            self.to_local.transform_vector3(ray.d),
+            t_max,
+        )
+    }
+
+    /// The interaction `si` found in the group's space by a ray that had direction `d` in
+    /// world space, moved to world space as Mitsuba's `Instance::compute_surface_interaction`
+    /// does: the point and ∂p/∂u, ∂p/∂v by `to_world`, the normals by its inverse transpose
+    /// (renormalised), the shading frame's tangent by `to_world` (then orthonormalised
+    /// against the new shading normal), its bitangent flipped when the transform mirrors.
+    /// uv, t and the primitive are unchanged.
+    pub fn to_world(&self, si: &SurfaceInteraction, d: Vec3, instance: u32) -> SurfaceInteraction {
+        let m = &self.to_world;
+        let p = m.transform_point3(si.p);
+        let n = self.normal_matrix.mul_vec3(si.n).normalize();
+        let sh_n = self.normal_matrix.mul_vec3(si.frame.n).normalize();
+        let mut frame = Frame::from_normal_tangent(sh_n, m.transform_vector3(si.frame.s));
+        if self.mirrors {
+            frame.t = -frame.t;
+        }
+        SurfaceInteraction {
+            p,
+            p_error: self.point_error(si.p, si.p_error, p),
+            t: si.t,
+            n,
+            frame,
+            uv: si.uv,
+            dp_du: m.transform_vector3(si.dp_du),
+            dp_dv: m.transform_vector3(si.dp_dv),
+            shape: si.shape,
+            instance: Some(instance),
+            face: si.face,
+            wi: frame.to_local(-d),
+        }
+    }
+
+    /// The world-space box of the group's bounds `[lo, hi]` (its eight corners moved by
+    /// `to_world`, as Mitsuba's `Instance::bbox`); inverted for an empty group.
+    pub fn world_bounds(&self, [lo, hi]: [Vec3; 2]) -> [Vec3; 2] {
+        if !lo.cmple(hi).all() {
+            return [Vec3::INFINITY, Vec3::NEG_INFINITY];
+        }
+        let mut out = [Vec3::INFINITY, Vec3::NEG_INFINITY];
+        for k in 0..8 {
+            let c = Vec3::new(
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            );
+            let p = self.to_world.transform_point3(c);
+            out = [out[0].min(p), out[1].max(p)];
+        }
+        // Outwards by the rounding of the corners' transform, so that the box holds every
+        // point of the group as moved by the same transform.
+        let pad = (out[0].abs().max(out[1].abs())) * gamma(4);
+        [out[0] - pad, out[1] + pad]
+    }
+
+    /// Error bound of `p = to_world · local` for a point `local` known up to `local_error`
+    /// in the group's space: that error carried over by |M|, the transform's own rounding
+    /// (pbrt-v4's `Transform::operator()(Point3fi)`, γ₃ (|M| |p| + |t|)), and the rounding of
+    /// the rays' move into the group's space, seen back in world space through
+    /// [`Instance::condition`] (a ray leaving `p` is moved there again before it is traced).
+    fn point_error(&self, local: Vec3, local_error: Vec3, p: Vec3) -> Vec3 {
+        let abs_m = Mat3A::from_cols(
+            self.to_world.matrix3.x_axis.abs(),
+            self.to_world.matrix3.y_axis.abs(),
+            self.to_world.matrix3.z_axis.abs(),
+        );
+        let carried = abs_m.mul_vec3(local_error);
+        let t = Vec3::from(self.to_world.translation.abs());
+        let own = (abs_m.mul_vec3(local.abs()) + t) * gamma(4);
+        let moved = self.condition.mul_vec3(p.abs() + t) * gamma(8);
+        carried + own + moved
     }
 }
 

@@ -143,6 +143,7 @@ pub fn load_gltf_with_warnings(
         film,
         sampler: SamplerDesc::default(),
         shapes,
+        shape_groups: Vec::new(),
         // glTF positions are f32 in the file: rendered where they are.
         world_origin: glam::DVec3::ZERO,
         emitters,

@@ -4,7 +4,7 @@
 use super::bsdfs::build_bsdf;
 use super::emitters::build_emitter;
 use super::props::Props;
-use super::shapes::{build_gltf_shapes, build_shape};
+use super::shapes::{build_gltf_shapes, build_shape, build_shape_group};
 use super::textures::build_texture;
 use super::transform;
 use super::xml::{Doc, Kind};
@@ -30,6 +30,14 @@ pub(crate) struct Builder<'a> {
     /// Where render space's origin lies in the file's world space: the first sensor's
     /// position (see [`Builder::to_world`]).
     pub world_origin: DVec3,
+    /// Built shape groups (`shapegroup`), in the order first built: an instance refers to
+    /// one by its place here.
+    pub shape_groups: Vec<Vec<radia_scene::ShapeDesc>>,
+    /// Shape group by node, so that a group instanced many times is built once.
+    pub group_cache: HashMap<usize, u32>,
+    /// Building a shape group's shapes: their `to_world` is in the group's own space, not
+    /// moved to render space (the instance's transform is).
+    pub in_group: bool,
 }
 
 impl Builder<'_> {
@@ -41,7 +49,11 @@ impl Builder<'_> {
     /// "camera-world" space by default (`src/pbrt/cameras.cpp`, `CameraTransform`). Only
     /// positions move: directions (environment maps, directional lights) are unaffected.
     pub fn to_world(&self, p: &mut Props<'_>) -> Result<DMat4, LoadError> {
-        Ok(DMat4::from_translation(-self.world_origin) * p.transform("to_world")?)
+        let m = p.transform("to_world")?;
+        if self.in_group {
+            return Ok(m);
+        }
+        Ok(DMat4::from_translation(-self.world_origin) * m)
     }
 
     /// A point given in the file's world space (a point light's `position`), in render space.
@@ -74,6 +86,9 @@ pub(crate) fn build_scene(doc: &Doc) -> Result<(SceneDescription, Vec<String>), 
         texture_cache: HashMap::new(),
         warnings: Vec::new(),
         world_origin: first_sensor_position(doc),
+        shape_groups: Vec::new(),
+        group_cache: HashMap::new(),
+        in_group: false,
     };
     let mut p = Props::new(doc, 0);
 
@@ -108,6 +123,11 @@ pub(crate) fn build_scene(doc: &Doc) -> Result<(SceneDescription, Vec<String>), 
                     shapes.push(shape);
                     sampling_weights.shapes.push(1.0);
                 }
+            }
+            // A shape group is not a shape of the scene (Mitsuba's Scene constructor keeps
+            // it apart); built here so that its errors surface even if nothing instances it.
+            Kind::Shape if doc.nodes[n].plugin == "shapegroup" => {
+                build_shape_group(&mut b, n)?;
             }
             Kind::Shape => {
                 let (shape, weight) = build_shape(&mut b, n)?;
@@ -190,6 +210,7 @@ pub(crate) fn build_scene(doc: &Doc) -> Result<(SceneDescription, Vec<String>), 
         film,
         sampler,
         shapes,
+        shape_groups: std::mem::take(&mut b.shape_groups),
         emitters,
         world_origin: b.world_origin,
         sampling_weights,

@@ -18,6 +18,15 @@ use std::path::{Path, PathBuf};
 pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<(ShapeDesc, f32), LoadError> {
     let mut p = Props::new(b.doc, idx);
     let origin = format!("{}:{}", b.doc.file_of(p.node).display(), p.node.pos.line);
+    match p.node.plugin.as_str() {
+        "instance" => return Ok((build_instance(b, p, origin)?, 1.0)),
+        "shapegroup" => {
+            return Err(p.err(
+                "a shapegroup is not a shape of its own: declare it at the top of the scene and place it with <shape type=\"instance\">",
+            ))
+        }
+        _ => {}
+    }
 
     // Children: one BSDF, one emitter (Mitsuba's Shape constructor).
     let mut bsdf = None;
@@ -142,12 +151,9 @@ pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<(ShapeDesc,
             }
             Geometry::Disk { to_world: glam::Affine3A::from_mat4(to_world.as_mat4()), flip_normals }
         }
-        "shapegroup" | "instance" => {
-            return Err(p.err(format!("<shape type=\"{plugin}\"> (instancing) is not supported by radia")))
-        }
         other => {
             return Err(p.err(format!(
-                "unsupported shape plugin type \"{other}\" (radia supports: obj, ply, rectangle, cube, sphere, disk)"
+                "unsupported shape plugin type \"{other}\" (radia supports: obj, ply, rectangle, cube, sphere, disk, shapegroup, instance)"
             )))
         }
     };
@@ -161,6 +167,126 @@ pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<(ShapeDesc,
         origin,
     };
     Ok((shape, sampling_weight))
+}
+
+/// Mitsuba's `shapegroup` (`src/render/shapegroup.cpp`): its shapes, in the group's own
+/// space, as shape group number .. of the scene (built once per node, however many instances
+/// refer to it). Refused as Mitsuba refuses them: anything but a shape inside, a nested
+/// group or instance, a shape with an emitter.
+pub(crate) fn build_shape_group(b: &mut Builder<'_>, idx: usize) -> Result<u32, LoadError> {
+    if let Some(&g) = b.group_cache.get(&idx) {
+        return Ok(g);
+    }
+    let mut p = Props::new(b.doc, idx);
+    if p.has_any("to_world") {
+        // Mitsuba's Shape constructor reads it, and the group never uses it.
+        p.transform("to_world")?;
+        b.warnings.push(format!(
+            "{}:{}:{}: shapegroup: \"to_world\" is ignored (as by Mitsuba); place the group with an instance's to_world",
+            b.doc.file_of(p.node).display(),
+            p.node.pos.line,
+            p.node.pos.col
+        ));
+    }
+    let mut members = Vec::new();
+    let was_in_group = std::mem::replace(&mut b.in_group, true);
+    for (i, n, kind) in p.objects() {
+        p.take(i);
+        let child = &b.doc.nodes[n];
+        let here = p.prop_pos(i);
+        let refused = match (kind, child.plugin.as_str()) {
+            (Kind::Shape, "shapegroup") => Some("nested shape groups are not permitted (Mitsuba: \"Nested ShapeGroup is not permitted\")".to_string()),
+            (Kind::Shape, "instance") => Some("an instance inside a shapegroup: nested instancing is not permitted (as in Mitsuba)".to_string()),
+            (Kind::Shape, _) => None,
+            (_, _) => Some(format!(
+                "a shapegroup holds only shapes, not {} (Mitsuba: \"Tried to add an unsupported object\")",
+                b.doc.nodes[n].describe()
+            )),
+        };
+        if let Some(message) = refused {
+            b.in_group = was_in_group;
+            return Err(p.err_at(here, message));
+        }
+        let built = build_shape(b, n);
+        let (shape, _) = match built {
+            Ok(s) => s,
+            Err(e) => {
+                b.in_group = was_in_group;
+                return Err(e);
+            }
+        };
+        if shape.emission.is_some() {
+            b.in_group = was_in_group;
+            let child = &b.doc.nodes[n];
+            return Err(LoadError::at(
+                b.doc.file_of(child),
+                child.pos,
+                "a shape with an area emitter inside a shapegroup: instancing of emitters is not supported (as in Mitsuba)",
+            ));
+        }
+        members.push(shape);
+    }
+    b.in_group = was_in_group;
+    p.finish()?;
+    let g = b.shape_groups.len() as u32;
+    b.shape_groups.push(members);
+    b.group_cache.insert(idx, g);
+    Ok(g)
+}
+
+/// Mitsuba's `instance` (`src/shapes/instance.cpp`): exactly one shape group (nested or
+/// referenced) placed by `to_world`.
+fn build_instance(
+    b: &mut Builder<'_>,
+    mut p: Props<'_>,
+    origin: String,
+) -> Result<ShapeDesc, LoadError> {
+    if b.in_group {
+        return Err(p.err(
+            "an instance inside a shapegroup: nested instancing is not permitted (as in Mitsuba)",
+        ));
+    }
+    let mut group = None;
+    for (i, n, kind) in p.objects() {
+        let target = &b.doc.nodes[n];
+        if kind != Kind::Shape || target.plugin != "shapegroup" {
+            return Err(p.err_at(
+                p.prop_pos(i),
+                format!(
+                    "only a shapegroup can be specified in an instance, found {}",
+                    target.describe()
+                ),
+            ));
+        }
+        if group.is_some() {
+            return Err(p.err_at(
+                p.prop_pos(i),
+                "only a single shapegroup can be specified per instance",
+            ));
+        }
+        p.take(i);
+        group = Some(build_shape_group(b, n)?);
+    }
+    let Some(group) = group else {
+        return Err(
+            p.err("instance: a reference to a shapegroup must be specified (<ref id=\"...\"/>)")
+        );
+    };
+    let to_world = b.to_world(&mut p)?;
+    let det = DMat3::from_mat4(to_world).determinant();
+    if det == 0.0 || !det.is_finite() {
+        return Err(p.err("instance: the to_world transform is singular or not finite"));
+    }
+    p.finish()?;
+    Ok(ShapeDesc {
+        geometry: Geometry::Instance {
+            group,
+            to_world: glam::Affine3A::from_mat4(to_world.as_mat4()),
+        },
+        bsdf: default_bsdf(false),
+        emission: None,
+        origin,
+    })
 }
 
 /// `raw` subdivided and displaced as the shape asks (unchanged without a modifier).

@@ -1163,9 +1163,10 @@ fn loader_rectangle_cube_sphere_disk() {
         load("cylinder", r#"<shape type="cylinder"/>"#),
         "unsupported shape plugin type \"cylinder\"",
     );
+    // Instancing is supported (tests/instances.rs); an instance needs its group.
     expect_err(
-        load("shapegroup", r#"<shape type="shapegroup"/>"#),
-        "not supported",
+        load("instance", r#"<shape type="instance"/>"#),
+        "a reference to a shapegroup must be specified",
     );
     expect_err(
         load(

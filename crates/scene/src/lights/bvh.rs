@@ -274,6 +274,7 @@ pub(crate) fn light_bounds(
                         ..at(Vec3::ZERO, n, 1.0, cos_half_pi)
                     }
                 }
+                ShapeKind::Instance(_) => unreachable!("an instance is never an emitter"),
             })
         }
         Emitter::Point(l) => Some(at(l.position, Vec3::Z, -1.0, cos_half_pi)),

@@ -269,7 +269,9 @@ pub fn weight_of(weights: &[f32], e: u32) -> f32 {
 /// lights at infinity shine through); the unit sphere when there are no shapes.
 pub fn scene_sphere(shapes: &[Shape]) -> (Vec3, f32) {
     let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-    for s in shapes {
+    // A shape group's own shapes are not in the scene: its instances are (Mitsuba's scene
+    // bounding box, `src/render/scene.cpp`).
+    for s in shapes.iter().filter(|s| s.group.is_none()) {
         let (a, b) = match &s.kind {
             ShapeKind::Mesh(m) => m
                 .positions
@@ -282,6 +284,7 @@ pub fn scene_sphere(shapes: &[Shape]) -> (Vec3, f32) {
                     + to_world.transform_vector3(Vec3::Y).length();
                 (c - r, c + r)
             }
+            ShapeKind::Instance(instance) => (instance.bounds[0], instance.bounds[1]),
         };
         lo = lo.min(a);
         hi = hi.max(b);

@@ -59,6 +59,7 @@ fn scene(shapes: Vec<ShapeDesc>, emitters: Vec<EmitterDesc>, kind: LightSamplerK
         film: FilmDesc::default(),
         sampler: SamplerDesc::default(),
         shapes,
+        shape_groups: Vec::new(),
         world_origin: glam::DVec3::ZERO,
         emitters,
         sampling_weights: Default::default(),
