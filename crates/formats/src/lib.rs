@@ -13,6 +13,17 @@
 //! Every reader reports a problem as a [`LoadError`] naming the file and, where there is
 //! one, the line and column. `mesh` turns what a mesh reader found into a
 //! [`radia_scene::Mesh`] the same way for every format (normals, degenerate triangles).
+//!
+//! The PLY and OBJ readers are this crate's own rather than `ply-rs-bw` or `tobj`: they read
+//! what Mitsuba's `ply.cpp` and `obj.cpp` read, with its semantics (ASCII and both binary
+//! byte orders, any vertex property layout with `u`/`v`, `s`/`t` or `texture_u`/`texture_v`,
+//! `face_normals`, `flip_tex_coords`, one vertex per distinct OBJ `v/vt/vn` triple), and a
+//! little more (polygons fan-triangulated, negative OBJ indices), every problem an error
+//! naming the file and line (`ply.rs`, `obj.rs`).
+//! Measured on a 4,004,450-triangle mesh (2 cores, loaded machine, median of 5, 2026-12-02):
+//! binary PLY (116 MB) 0.68 s here, read and finished into a mesh, against 2.45 s for
+//! `ply-rs-bw` 1.0 parsing into typed vertex and face records; OBJ (442 MB, `v/vt/vn`) 7.5 s
+//! here against 7.9 s for `tobj` 4.0 (`single_index`, parse only).
 
 mod error;
 pub mod fuzzing;
