@@ -120,6 +120,11 @@ class RenderTest(unittest.TestCase):
 
     def test_gil_is_released_while_rendering(self):
         scene = radia.load_file(SIMPLE, res=64)
+        # A render long enough to tell on any machine: spp from a timed short one (a fixed
+        # 256 spp took 0.195 s on a quiet machine, too short for the check below).
+        t0 = time.perf_counter()
+        radia.render(scene, spp=16)
+        spp = int(min(1 << 16, max(256, 16 * 0.6 / max(time.perf_counter() - t0, 1e-4))))
         ticks = [0]
         stop = threading.Event()
 
@@ -130,7 +135,7 @@ class RenderTest(unittest.TestCase):
         t = threading.Thread(target=count)
         t.start()
         t0 = time.perf_counter()
-        radia.render(scene, spp=256)
+        radia.render(scene, spp=spp)
         secs = time.perf_counter() - t0
         stop.set()
         t.join()
