@@ -1,7 +1,7 @@
 //! The typed scene description: what a loader (Mitsuba XML, glTF) produces and
 //! [`crate::Scene::build`] consumes. Plain data in world space; no strings left to compare.
 
-use glam::{Affine3A, DVec3, Vec2, Vec3, Vec4};
+use glam::{Affine3A, DVec3, Mat3A, Vec2, Vec3, Vec4};
 use radia_bsdf::{Bsdf, Texture};
 use radia_math::Spectrum;
 use radia_sampling::SamplerKind;
@@ -190,6 +190,13 @@ pub enum Geometry {
     Sphere {
         center: Vec3,
         radius: f32,
+        /// The linear part of the shape's `to_world` (radius included): where the unit
+        /// sphere's axes go. It orients the uv parametrisation and ∂p/∂u, ∂p/∂v, as Mitsuba
+        /// maps hit points back by the inverse (`to_object`); the surface itself is the
+        /// sphere of `center` and `radius` whatever the matrix (a non-uniform scale does not
+        /// make an ellipsoid, as in Mitsuba). `Mat3A::from_diagonal(Vec3::splat(radius))`
+        /// for an unrotated sphere ([`Geometry::sphere`]).
+        to_world: Mat3A,
         flip_normals: bool,
     },
     /// Analytic unit disk in the xy-plane, normal +z, mapped by `to_world` (`src/shapes/disk.cpp`).
@@ -204,6 +211,18 @@ pub enum Geometry {
         group: u32,
         to_world: Affine3A,
     },
+}
+
+impl Geometry {
+    /// An unrotated sphere: its uv poles on the z axis, u = 0 towards +x.
+    pub fn sphere(center: Vec3, radius: f32, flip_normals: bool) -> Self {
+        Geometry::Sphere {
+            center,
+            radius,
+            to_world: Mat3A::from_diagonal(Vec3::splat(radius)),
+            flip_normals,
+        }
+    }
 }
 
 /// A shape with its material and, if it glows, its `area` emitter.

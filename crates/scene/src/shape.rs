@@ -13,9 +13,13 @@ use radia_sampling::warp;
 #[derive(Clone, Debug)]
 pub enum ShapeKind {
     Mesh(Mesh),
+    /// The sphere of `center` and `radius`; `to_world` and its inverse `to_object` (linear
+    /// parts of Mitsuba's transforms, radius included) orient its uv parametrisation.
     Sphere {
         center: Vec3,
         radius: f32,
+        to_world: Mat3A,
+        to_object: Mat3A,
         flip_normals: bool,
     },
     Disk {
@@ -159,11 +163,14 @@ impl Shape {
             Geometry::Sphere {
                 center,
                 radius,
+                to_world,
                 flip_normals,
             } => (
                 ShapeKind::Sphere {
                     center,
                     radius,
+                    to_world,
+                    to_object: to_world.inverse(),
                     flip_normals,
                 },
                 4.0 * PI * radius * radius,
@@ -306,35 +313,25 @@ impl Shape {
                 ShapeKind::Sphere {
                     center,
                     radius,
+                    to_world,
+                    to_object,
                     flip_normals,
                 },
                 _,
             ) => {
                 let t = hit.t;
-                let mut local = (ray_o + d * t) - *center;
+                let mut offset = (ray_o + d * t) - *center;
                 // Reproject onto the surface for accuracy.
-                local *= *radius / local.length();
-                let p = *center + local;
-                let p_error = sphere_point_error(*center, local);
-                let mut n = local / *radius;
-                let mut u = radia_math::trig::atan2(local.y, local.x) * INV_TWO_PI;
-                if u < 0.0 {
-                    u += 1.0;
-                }
-                let v = radia_math::safe_acos(n.z) / PI;
-                let dpdu = Vec3::new(-local.y, local.x, 0.0) * (2.0 * PI);
-                // Mitsuba's sphere.cpp: dp/dv = (z cos φ, z sin φ, −r sin θ) · π.
-                let rxy = (local.x * local.x + local.y * local.y).sqrt();
-                let (cos_phi, sin_phi) = if rxy > 0.0 {
-                    (local.x / rxy, local.y / rxy)
-                } else {
-                    (1.0, 0.0)
-                };
-                let dpdv = Vec3::new(local.z * cos_phi, local.z * sin_phi, -rxy) * PI;
+                offset *= *radius / offset.length();
+                let p = *center + offset;
+                let p_error = sphere_point_error(*center, offset);
+                let mut n = offset / *radius;
+                let local = to_object.mul_vec3(offset);
+                let (dpdu, dpdv) = sphere_tangents(local, to_world);
                 if *flip_normals {
                     n = -n;
                 }
-                (p, p_error, n, n, dpdu, dpdv, Vec2::new(u, v), None)
+                (p, p_error, n, n, dpdu, dpdv, sphere_uv(local), None)
             }
             (
                 ShapeKind::Disk {
@@ -412,13 +409,15 @@ impl Shape {
                     None => Vec2::new(b1, b2),
                 }
             }
-            ShapeKind::Sphere { center, .. } => {
-                let local = (p - *center).normalize();
-                let mut u = radia_math::trig::atan2(local.y, local.x) * INV_TWO_PI;
-                if u < 0.0 {
-                    u += 1.0;
-                }
-                Vec2::new(u, radia_math::safe_acos(local.z) / PI)
+            ShapeKind::Sphere {
+                center,
+                radius,
+                to_object,
+                ..
+            } => {
+                // Onto the surface first: `p` may carry the rounding of its computation.
+                let offset = (p - *center).normalize() * *radius;
+                sphere_uv(to_object.mul_vec3(offset))
             }
             ShapeKind::Disk { to_local, .. } => {
                 let local = to_local.transform_point3(p);
@@ -468,6 +467,7 @@ impl Shape {
                 center,
                 radius,
                 flip_normals,
+                ..
             } => {
                 let local = warp::square_to_uniform_sphere(u);
                 let n = if *flip_normals { -local } else { local };
@@ -514,6 +514,7 @@ impl Shape {
                 center,
                 radius,
                 flip_normals,
+                ..
             } => {
                 if let Some(cone) = SphereCone::new(*center, *radius, ref_p) {
                     return cone.sample(*center, *radius, *flip_normals, ref_p, u);
@@ -792,6 +793,31 @@ fn mesh_normal(mesh: &Mesh, v: &[Vec3; 3]) -> Vec3 {
 }
 
 /// The cone of directions a sphere subtends from a point outside it.
+/// uv of the point `local` of the sphere in its object space (the unit sphere, up to a
+/// non-uniform scale Mitsuba warns about), as Mitsuba's `sphere.cpp`: u = φ / 2π from +x
+/// towards +y, v = θ / π from the +z pole.
+fn sphere_uv(local: Vec3) -> Vec2 {
+    let mut u = radia_math::trig::atan2(local.y, local.x) * INV_TWO_PI;
+    if u < 0.0 {
+        u += 1.0;
+    }
+    Vec2::new(u, radia_math::safe_acos(local.z) / PI)
+}
+
+/// ∂p/∂u and ∂p/∂v in world space at the object-space point `local` (Mitsuba's
+/// `sphere.cpp`): to_world · (−y, x, 0) · 2π and to_world · (z cos φ, z sin φ, −sin θ) · π,
+/// with (1, 0, 0) · π for ∂p/∂v at the poles.
+fn sphere_tangents(local: Vec3, to_world: &Mat3A) -> (Vec3, Vec3) {
+    let dpdu = Vec3::new(-local.y, local.x, 0.0) * (2.0 * PI);
+    let rxy = (local.x * local.x + local.y * local.y).sqrt();
+    let dpdv = if rxy > 0.0 {
+        Vec3::new(local.z * local.x / rxy, local.z * local.y / rxy, -rxy) * PI
+    } else {
+        Vec3::new(PI, 0.0, 0.0)
+    };
+    (to_world.mul_vec3(dpdu), to_world.mul_vec3(dpdv))
+}
+
 struct SphereCone {
     /// Squared distance from the point to the centre.
     dist2: f32,

@@ -102,11 +102,7 @@ fn agrees_with_brute_force(build: impl Fn(&[Shape]) -> Accel) {
         ),
         Shape::new(Geometry::Mesh(soup(&mut rng, 30_000)), bsdf, None),
         Shape::new(
-            Geometry::Sphere {
-                center: Vec3::new(2.5, 2.5, 2.5),
-                radius: 0.7,
-                flip_normals: false,
-            },
+            Geometry::sphere(Vec3::new(2.5, 2.5, 2.5), 0.7, false),
             bsdf,
             None,
         ),
@@ -296,11 +292,7 @@ fn small_scenes_agree_with_brute_force() {
             let c = random_in_cube(&mut rng, 1.0);
             match k % 3 {
                 0 => shapes.push(Shape::new(
-                    Geometry::Sphere {
-                        center: c,
-                        radius: rng.random_range(0.1..0.6),
-                        flip_normals: false,
-                    },
+                    Geometry::sphere(c, rng.random_range(0.1..0.6), false),
                     0,
                     None,
                 )),

@@ -79,11 +79,7 @@ fn random_dir(rng: &mut Pcg64) -> Vec3 {
 /// Two groups (a closed tessellated sphere with a soup of small triangles and an analytic
 /// sphere; a disk and a soup), 7 instances, and a mesh and a sphere of the scene's own.
 fn instanced_shapes(rng: &mut Pcg64) -> Vec<Shape> {
-    let sphere = |center: Vec3, radius: f32| Geometry::Sphere {
-        center,
-        radius,
-        flip_normals: false,
-    };
+    let sphere = |center: Vec3, radius: f32| Geometry::sphere(center, radius, false);
     let placements = [
         (Vec3::ONE, Quat::IDENTITY, Vec3::new(-3.0, 0.0, 0.0), 0),
         (

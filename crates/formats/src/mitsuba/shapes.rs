@@ -10,7 +10,7 @@ use super::xml::Kind;
 use super::LoadError;
 use crate::mesh::{self, MeshStats, RawMesh};
 use crate::{obj, ply};
-use glam::{DMat3, DMat4, DVec3};
+use glam::{DMat3, DMat4, DVec3, Mat3A};
 use radia_scene::{Geometry, ShapeDesc};
 use std::path::{Path, PathBuf};
 
@@ -142,7 +142,13 @@ pub(crate) fn build_shape(b: &mut Builder<'_>, idx: usize) -> Result<(ShapeDesc,
             // A mirroring transform (or a negative radius) turns the sphere inside out, as in
             // Mitsuba (sign of the polar decomposition's stretch).
             let flip = flip_normals ^ (linear.determinant() < 0.0);
-            Geometry::Sphere { center: world_center.as_vec3(), radius: world_radius as f32, flip_normals: flip }
+            // The whole linear part orients the parametrisation (Mitsuba's `to_object`).
+            Geometry::Sphere {
+                center: world_center.as_vec3(),
+                radius: world_radius as f32,
+                to_world: Mat3A::from(linear.as_mat3()),
+                flip_normals: flip,
+            }
         }
         "disk" => {
             let det = DMat3::from_mat4(to_world).determinant();

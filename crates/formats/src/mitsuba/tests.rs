@@ -1123,10 +1123,12 @@ fn loader_rectangle_cube_sphere_disk() {
         Geometry::Sphere {
             center,
             radius,
+            to_world,
             flip_normals,
         } => {
             assert_vec_close(center, Vec3::new(12., 4., 6.), 1e-6, "center");
             assert_close(radius, 1.0, 1e-6, "radius");
+            assert_eq!(to_world, glam::Mat3A::IDENTITY, "scale 2 times radius 0.5");
             assert!(!flip_normals);
         }
         ref g => panic!("{g:?}"),
@@ -1136,6 +1138,7 @@ fn loader_rectangle_cube_sphere_disk() {
             center,
             radius,
             flip_normals,
+            ..
         } => {
             assert_eq!((center, radius, flip_normals), (Vec3::ZERO, 1.0, true));
         }

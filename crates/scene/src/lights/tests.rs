@@ -146,11 +146,7 @@ fn disk(center: Vec3, radius: f32, normal: Vec3) -> Geometry {
 }
 
 fn sphere(center: Vec3, radius: f32, flip_normals: bool) -> Geometry {
-    Geometry::Sphere {
-        center,
-        radius,
-        flip_normals,
-    }
+    Geometry::sphere(center, radius, flip_normals)
 }
 
 // ---------------------------------------------------------------------------------------
