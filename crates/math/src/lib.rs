@@ -33,6 +33,22 @@ pub fn safe_sqrt(x: f32) -> f32 {
     x.max(0.0).sqrt()
 }
 
+/// The angle between the unit vector `v` and +z: `acos(v.z)`, accurate near both poles
+/// where `acos` is not (Don Hatch's form, Dr.Jit's `unit_angle_z`, which Mitsuba's
+/// `dir_to_sph` uses). The `asin` argument is clamped, so that a vector off unit length
+/// still gives an angle in [0, π].
+#[inline]
+pub fn unit_angle_z(v: Vec3) -> f32 {
+    let pole = if v.z >= 0.0 { 1.0 } else { -1.0 };
+    let half_chord = 0.5 * Vec3::new(v.x, v.y, v.z - pole).length();
+    let angle = 2.0 * half_chord.min(1.0).asin();
+    if v.z >= 0.0 {
+        angle
+    } else {
+        PI - angle
+    }
+}
+
 /// `acos` clamped to [-1, 1].
 #[inline]
 pub fn safe_acos(x: f32) -> f32 {
@@ -56,3 +72,42 @@ pub const PI: f32 = std::f32::consts::PI;
 pub const INV_PI: f32 = std::f32::consts::FRAC_1_PI;
 pub const INV_TWO_PI: f32 = 0.5 * std::f32::consts::FRAC_1_PI;
 pub const INV_FOUR_PI: f32 = 0.25 * std::f32::consts::FRAC_1_PI;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unit_angle_z_is_the_angle_to_z_and_accurate_at_the_poles() {
+        for i in 0..=200 {
+            let theta = PI * i as f32 / 200.0;
+            let phi = 0.37 * i as f32;
+            let v = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            );
+            let exact = (v.z as f64).acos() as f32;
+            assert!(
+                (unit_angle_z(v) - exact).abs() <= 2e-6,
+                "θ = {theta}: {} vs {exact}",
+                unit_angle_z(v)
+            );
+        }
+        // 1e-4 rad from either pole, where acos(z) of the rounded z has lost 2 digits.
+        for theta in [1e-4f32, PI - 1e-4] {
+            let v = Vec3::new(
+                (theta as f64).sin() as f32,
+                0.0,
+                (theta as f64).cos() as f32,
+            );
+            assert!(
+                (unit_angle_z(v) - theta).abs() <= 1e-9 + 1e-6 * theta,
+                "{theta}: {}",
+                unit_angle_z(v)
+            );
+        }
+        // Off unit length the asin argument is clamped: an angle, never NaN.
+        assert_eq!(unit_angle_z(Vec3::new(0.0, 2.5, 0.1)), PI);
+    }
+}

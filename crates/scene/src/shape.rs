@@ -794,14 +794,20 @@ fn mesh_normal(mesh: &Mesh, v: &[Vec3; 3]) -> Vec3 {
 
 /// The cone of directions a sphere subtends from a point outside it.
 /// uv of the point `local` of the sphere in its object space (the unit sphere, up to a
-/// non-uniform scale Mitsuba warns about), as Mitsuba's `sphere.cpp`: u = φ / 2π from +x
-/// towards +y, v = θ / π from the +z pole.
+/// non-uniform scale Mitsuba warns about), as Mitsuba's `sphere.cpp` (`dir_to_sph`): u = φ / 2π
+/// from +x towards +y, v = θ / π from the +z pole.
+///
+/// With a non-uniform scale `local` is off unit length, and θ is not `acos(z)`: Mitsuba's
+/// θ (Dr.Jit's `unit_angle_z`, which radia uses too) is 2 asin(|local − (0, 0, ±1)| / 2),
+/// NaN in Mitsuba where that argument exceeds 1 (where the radius is over √3 times the
+/// smallest scale), clamped in radia ([`radia_math::unit_angle_z`]): the two agree wherever
+/// Mitsuba's uv is finite.
 fn sphere_uv(local: Vec3) -> Vec2 {
     let mut u = radia_math::trig::atan2(local.y, local.x) * INV_TWO_PI;
     if u < 0.0 {
         u += 1.0;
     }
-    Vec2::new(u, radia_math::safe_acos(local.z) / PI)
+    Vec2::new(u, radia_math::unit_angle_z(local) / PI)
 }
 
 /// ∂p/∂u and ∂p/∂v in world space at the object-space point `local` (Mitsuba's
