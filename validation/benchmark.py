@@ -459,8 +459,15 @@ def efficiency_main(a):
             rows = []
             for label, binary in binaries:
                 for s in (r_samplers if label == "radia" else alt_samplers):
-                    r = measure_radia(scene, a.res, a.spp, s, binary, label, a.threads, ref,
-                                      a.repeats, a.define)
+                    try:
+                        r = measure_radia(scene, a.res, a.spp, s, binary, label, a.threads,
+                                          ref, a.repeats, a.define)
+                    except ValidationError as e:
+                        if label == "radia":
+                            raise
+                        # An older binary may not read a newer scene: no row for it here.
+                        log(f"  {label:14s} skipped: it cannot render this scene ({str(e).splitlines()[0]})")
+                        break
                     rows.append(r)
                     log(f"  {label:14s} {s:12s} {r['spp']:>5} spp: total {r['total_s']:7.3f} s, "
                         f"render {r['render_s']:7.3f} s, relMSE {r['relmse_corrected']:.3e}, "
