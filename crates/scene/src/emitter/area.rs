@@ -4,7 +4,11 @@
 //! A textured radiance is looked up at the uv of the sampled point. Mitsuba then samples
 //! the point by the texture (`m_radiance->sample_position` mapped through the shape's
 //! parametrisation); radia keeps sampling the shape as for a constant one (by solid angle
-//! or area). Both estimators are unbiased: the images agree, the noise differs.
+//! or area). Both estimators are unbiased: the images agree, the noise differs. (Except on
+//! a sphere rotated by more than 90°: Mitsuba 3.9.1's `Sphere::eval_parameterization`
+//! aims its ray from `p + local` along `-local` with `local` unrotated, and finds the wrong
+//! point or none for most uv: 120 of 180 uv at 120° about x, none at 80°. radia's
+//! estimator does not use that map.)
 //!
 //! ```xml
 //! <shape type="sphere">
