@@ -40,11 +40,7 @@ fn furnace_scene(albedo: f32, max_depth: i32, filter: FilterDesc) -> Scene {
             seed: 1,
         },
         shapes: vec![ShapeDesc {
-            geometry: Geometry::Sphere {
-                center: Vec3::ZERO,
-                radius: 1.0,
-                flip_normals: false,
-            },
+            geometry: Geometry::sphere(Vec3::ZERO, 1.0, false),
             bsdf: Bsdf::Diffuse(Diffuse::new(Vec3::splat(albedo))),
             emission: None,
             origin: "test".into(),

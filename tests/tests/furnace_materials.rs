@@ -64,11 +64,7 @@ fn scene(bsdf: Bsdf, spp: u32) -> Scene {
             seed: 1,
         },
         shapes: vec![ShapeDesc {
-            geometry: Geometry::Sphere {
-                center: Vec3::ZERO,
-                radius: 1.0,
-                flip_normals: false,
-            },
+            geometry: Geometry::sphere(Vec3::ZERO, 1.0, false),
             bsdf,
             emission: None,
             origin: "furnace sphere".into(),
