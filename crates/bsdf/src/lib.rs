@@ -290,6 +290,20 @@ impl Bsdf {
         }
     }
 
+    /// Whether the model reads more of its [`ShadingPoint`] than `uv`: the parametrisation's
+    /// tangents and the geometric normal, which only normal and bump maps (anywhere in the
+    /// tree) use. Scenes decide this once per BSDF, so that a surface without them is not
+    /// given tangents it never reads.
+    pub fn reads_surface_frame(&self) -> bool {
+        match self {
+            Bsdf::NormalMap(_) | Bsdf::BumpMap(_) => true,
+            Bsdf::Blend(m) => m.bsdfs.iter().any(Bsdf::reads_surface_frame),
+            Bsdf::TwoSided(m) => m.sides.iter().any(Bsdf::reads_surface_frame),
+            Bsdf::Mask(m) => m.nested.reads_surface_frame(),
+            _ => false,
+        }
+    }
+
     /// [`Bsdf::samples_lobe`] of an adapter: its nested models' (kept out of line, as the
     /// recursion would stop `samples_lobe` from inlining).
     #[inline(never)]

@@ -147,7 +147,7 @@ impl PathIntegrator {
             }
 
             let bsdf = scene.bsdf(&si);
-            let sp = si.shading_point();
+            let sp = scene.shading_point(&si);
 
             // ---- Emitter sampling (next-event estimation) ----
             if bsdf.flags().has_smooth() && self.has_lights {
