@@ -116,3 +116,80 @@ fn the_files_cameras_and_lights_are_left_out_with_a_warning() {
         "{warnings:?}"
     );
 }
+
+#[test]
+fn a_gltf_shape_in_a_shapegroup_is_instanced_with_all_its_surfaces() {
+    let model = gltf_scene("hierarchy.glb");
+    let (direct, _) = load_gltf_with_warnings(&model, &GltfOptions::default()).unwrap();
+    let dir = std::env::temp_dir().join(format!("radia-gltf-group-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("group.xml");
+    let xml = format!(
+        r#"<scene version="3.0.0">
+    <sensor type="perspective">
+        <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, -1" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+    </sensor>
+    <emitter type="constant"/>
+    <shape type="shapegroup" id="asset">
+        <shape type="gltf"><string name="filename" value="{}"/></shape>
+    </shape>
+    <shape type="instance"><ref id="asset"/><transform name="to_world"><translate x="-3" z="-10"/></transform></shape>
+    <shape type="instance"><ref id="asset"/><transform name="to_world"><rotate y="1" angle="90"/><translate x="3" z="-10"/></transform></shape>
+</scene>
+"#,
+        model.display()
+    );
+    std::fs::write(&path, xml).unwrap();
+    let (desc, _) = load_mitsuba_xml_with_warnings(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(desc.shape_groups.len(), 1);
+    let group = &desc.shape_groups[0];
+    assert_eq!(group.len(), direct.shapes.len());
+    assert!(!group.is_empty());
+    // In the group's own space: the file's surfaces as they are, with their materials.
+    for (a, b) in group.iter().zip(&direct.shapes) {
+        assert_eq!(a.geometry, b.geometry, "{}", b.origin);
+        assert_eq!(format!("{:?}", a.bsdf), format!("{:?}", b.bsdf));
+    }
+    let instances = desc
+        .shapes
+        .iter()
+        .filter(|s| matches!(s.geometry, Geometry::Instance { group: 0, .. }))
+        .count();
+    assert_eq!((instances, desc.shapes.len()), (2, 2));
+    // Built once, in the group, whatever the number of instances.
+    let scene = radia_scene::Scene::build(desc);
+    let in_group = scene.shapes.iter().filter(|s| s.group == Some(0)).count();
+    assert_eq!(in_group, direct.shapes.len());
+}
+
+#[test]
+fn an_emissive_gltf_file_in_a_shapegroup_is_refused_as_an_instanced_emitter() {
+    let model = gltf_scene("boxes.gltf");
+    let (direct, _) = load_gltf_with_warnings(&model, &GltfOptions::default()).unwrap();
+    assert!(
+        direct.shapes.iter().any(|s| s.emission.is_some()),
+        "boxes.gltf glows"
+    );
+    let dir = std::env::temp_dir().join(format!("radia-gltf-group-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("emissive-group.xml");
+    let xml = format!(
+        r#"<scene version="3.0.0">
+    <shape type="shapegroup" id="asset">
+        <shape type="gltf"><string name="filename" value="{}"/></shape>
+    </shape>
+    <shape type="instance"><ref id="asset"/></shape>
+</scene>
+"#,
+        model.display()
+    );
+    std::fs::write(&path, xml).unwrap();
+    let err = load_mitsuba_xml_with_warnings(&path, &[])
+        .expect_err("an instanced emitter")
+        .to_string();
+    assert!(
+        err.contains("emissive-group.xml:3:9") && err.contains("instancing of emitters"),
+        "{err}"
+    );
+}

@@ -213,24 +213,29 @@ pub(crate) fn build_shape_group(b: &mut Builder<'_>, idx: usize) -> Result<u32, 
             b.in_group = was_in_group;
             return Err(p.err_at(here, message));
         }
-        let built = build_shape(b, n);
-        let (shape, _) = match built {
+        // A `<shape type="gltf">` adds all the file's surfaces to the group.
+        let built = if b.doc.nodes[n].plugin == "gltf" {
+            build_gltf_shapes(b, n)
+        } else {
+            build_shape(b, n).map(|(shape, _)| vec![shape])
+        };
+        let shapes = match built {
             Ok(s) => s,
             Err(e) => {
                 b.in_group = was_in_group;
                 return Err(e);
             }
         };
-        if shape.emission.is_some() {
+        if shapes.iter().any(|s| s.emission.is_some()) {
             b.in_group = was_in_group;
             let child = &b.doc.nodes[n];
             return Err(LoadError::at(
                 b.doc.file_of(child),
                 child.pos,
-                "a shape with an area emitter inside a shapegroup: instancing of emitters is not supported (as in Mitsuba)",
+                "a shape with an area emitter inside a shapegroup (for a glTF file: an emissive material): instancing of emitters is not supported (as in Mitsuba)",
             ));
         }
-        members.push(shape);
+        members.extend(shapes);
     }
     b.in_group = was_in_group;
     p.finish()?;
