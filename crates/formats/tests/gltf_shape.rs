@@ -12,12 +12,12 @@ fn gltf_scene(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// A scene with the camera at the origin (so that render space is the file's world space)
-/// and one glTF shape with the `to_world` given as XML.
-fn load_xml(model: &Path, to_world: &str) -> (SceneDescription, Vec<String>) {
+/// `body` in a scene with the camera at the origin (so that render space is the file's world
+/// space), an 8×8 film and a constant environment, written to a fresh file `name`.
+fn write_scene(name: &str, body: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("radia-gltf-shape-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(format!("scene-{}.xml", to_world.len()));
+    let path = dir.join(name);
     let xml = format!(
         r#"<scene version="3.0.0">
     <sensor type="perspective">
@@ -25,15 +25,24 @@ fn load_xml(model: &Path, to_world: &str) -> (SceneDescription, Vec<String>) {
         <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
     </sensor>
     <emitter type="constant"/>
-    <shape type="gltf">
-        <string name="filename" value="{}"/>
-        {to_world}
-    </shape>
+{body}
 </scene>
-"#,
-        model.display()
+"#
     );
     std::fs::write(&path, xml).unwrap();
+    path
+}
+
+/// One glTF shape with the `to_world` given as XML, in [`write_scene`]'s scene.
+fn load_xml(model: &Path, to_world: &str) -> (SceneDescription, Vec<String>) {
+    let body = format!(
+        r#"    <shape type="gltf">
+        <string name="filename" value="{}"/>
+        {to_world}
+    </shape>"#,
+        model.display()
+    );
+    let path = write_scene(&format!("scene-{}.xml", to_world.len()), &body);
     load_mitsuba_xml_with_warnings(&path, &[]).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -121,26 +130,15 @@ fn the_files_cameras_and_lights_are_left_out_with_a_warning() {
 fn a_gltf_shape_in_a_shapegroup_is_instanced_with_all_its_surfaces() {
     let model = gltf_scene("hierarchy.glb");
     let (direct, _) = load_gltf_with_warnings(&model, &GltfOptions::default()).unwrap();
-    let dir = std::env::temp_dir().join(format!("radia-gltf-group-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("group.xml");
-    let xml = format!(
-        r#"<scene version="3.0.0">
-    <sensor type="perspective">
-        <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, -1" up="0, 1, 0"/></transform>
-        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
-    </sensor>
-    <emitter type="constant"/>
-    <shape type="shapegroup" id="asset">
+    let body = format!(
+        r#"    <shape type="shapegroup" id="asset">
         <shape type="gltf"><string name="filename" value="{}"/></shape>
     </shape>
     <shape type="instance"><ref id="asset"/><transform name="to_world"><translate x="-3" z="-10"/></transform></shape>
-    <shape type="instance"><ref id="asset"/><transform name="to_world"><rotate y="1" angle="90"/><translate x="3" z="-10"/></transform></shape>
-</scene>
-"#,
+    <shape type="instance"><ref id="asset"/><transform name="to_world"><rotate y="1" angle="90"/><translate x="3" z="-10"/></transform></shape>"#,
         model.display()
     );
-    std::fs::write(&path, xml).unwrap();
+    let path = write_scene("group.xml", &body);
     let (desc, _) = load_mitsuba_xml_with_warnings(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(desc.shape_groups.len(), 1);
     let group = &desc.shape_groups[0];

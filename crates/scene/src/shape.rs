@@ -792,7 +792,6 @@ fn mesh_normal(mesh: &Mesh, v: &[Vec3; 3]) -> Vec3 {
     }
 }
 
-/// The cone of directions a sphere subtends from a point outside it.
 /// uv of the point `local` of the sphere in its object space (the unit sphere, up to a
 /// non-uniform scale Mitsuba warns about), as Mitsuba's `sphere.cpp` (`dir_to_sph`): u = φ / 2π
 /// from +x towards +y, v = θ / π from the +z pole.
@@ -824,6 +823,7 @@ fn sphere_tangents(local: Vec3, to_world: &Mat3A) -> (Vec3, Vec3) {
     (to_world.mul_vec3(dpdu), to_world.mul_vec3(dpdv))
 }
 
+/// The cone of directions a sphere subtends from a point outside it.
 struct SphereCone {
     /// Squared distance from the point to the centre.
     dist2: f32,
