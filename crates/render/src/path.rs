@@ -86,127 +86,164 @@ impl PathIntegrator {
         }
     }
 
-    /// Radiance arriving at the camera along `ray`.
+    /// Radiance arriving at the camera along `ray`: [`PathIntegrator::bounce`] at each closest
+    /// hit, each next-event estimate's shadow ray traced at once. The many-paths-at-once loop
+    /// (`crate::wavefront`) runs the same steps for a packet of paths, tracing their rays
+    /// together, and so gives the same value bit for bit.
     /// Generic over the sampler so its calls inline into the path loop.
     pub fn li<S: Sampler>(
         &self,
         scene: &Scene,
-        mut ray: Ray,
+        ray: Ray,
         sampler: &mut SampleStream<'_, S>,
         stats: &mut PathStats,
     ) -> Spectrum {
-        let mut result = Spectrum::ZERO;
-        let mut beta = Spectrum::ONE;
-        let mut eta = 1.0f32;
-        let mut depth = 0u32;
-        // The ray is the camera's, or continues it through null surfaces only.
-        let mut primary = true;
-        // A camera ray counts as "delta" so that emitters it sees directly get full weight.
-        let mut prev = PrevVertex {
-            p: ray.o,
-            n: Vec3::ZERO,
-            bsdf_pdf: 1.0,
-            bsdf_delta: true,
+        let Some(mut path) = self.start(ray) else {
+            return Spectrum::ZERO;
         };
-        if self.max_depth == 0 {
-            return result;
-        }
-
         loop {
             stats.rays += 1;
-            let mut hit = scene.intersect(&ray);
-            if self.hide_emitters && primary {
-                hit = skip_area_emitters(scene, &mut ray, hit, stats);
+            let hit = scene.intersect(&path.ray);
+            let (shadow, goes_on) = self.bounce(scene, &mut path, hit, sampler, stats);
+            if let Some(shadow) = shadow {
+                let transmittance = scene.transmittance(&shadow.ray, shadow.crossings);
+                shadow.resolve(&mut path, transmittance);
             }
-            let Some(si) = hit else {
-                // ---- Escaped: environment emission (none without an environment) ----
-                // With hide_emitters an escaped camera ray gives 0 (path.cpp's `valid_ray`).
-                if let Some(env) = scene.environment {
-                    if !(self.hide_emitters && primary) {
-                        let emitter = &scene.emitters[env as usize];
-                        let le = emitter.eval_environment(ray.d);
-                        let w = self.mis_emitter_hit(scene, env, None, ray.d, &prev);
-                        result += beta * le * w;
-                    }
-                }
-                break;
-            };
-
-            // ---- Emission of the surface that was hit ----
-            // (With hide_emitters, camera rays never stop at an emitter: see above.)
-            if let Some((ei, emitter)) = scene.surface_emitter(&si) {
-                let le = emitter.eval_surface(&si);
-                if le != Spectrum::ZERO {
-                    let w = self.mis_emitter_hit(scene, ei, Some(&si), ray.d, &prev);
-                    result += beta * le * w;
-                }
-            }
-
-            if depth + 1 >= self.max_depth {
-                break;
-            }
-
-            let bsdf = scene.bsdf(&si);
-            let sp = scene.shading_point(&si);
-
-            // ---- Emitter sampling (next-event estimation) ----
-            if bsdf.flags().has_smooth() && self.has_lights {
-                sampler.seek(layout::bounce(depth) + layout::LIGHT_POSITION);
-                // Shadow rays may cross null surfaces, each a bounce (see the module docs).
-                let crossings = self.max_depth.saturating_sub(depth + 2);
-                result +=
-                    beta * self.sample_emitter(scene, &si, &sp, bsdf, crossings, sampler, stats);
-            }
-
-            // ---- BSDF sampling ----
-            let block = layout::bounce(depth);
-            sampler.seek(block + layout::BSDF_DIRECTION);
-            let u2 = sampler.next_2d();
-            // A value nothing reads is not drawn (the layout fixes every other one).
-            let u1 = if bsdf.samples_lobe() {
-                sampler.next_1d()
-            } else {
-                0.5
-            };
-            let Some(bs) = bsdf.sample(&sp, si.wi, u1, u2) else {
-                break;
-            };
-            if bs.weight == Spectrum::ZERO {
-                break;
-            }
-            beta *= bs.weight;
-            eta *= bs.eta;
-            if bs.lobe.is_null() {
-                // Straight on (exactly along the ray, not −wi through the frames); `prev`
-                // stays where the path last scattered.
-                ray = si.spawn_ray(ray.d);
-            } else {
-                primary = false;
-                prev = PrevVertex {
-                    p: si.p,
-                    n: si.frame.n,
-                    bsdf_pdf: bs.pdf,
-                    bsdf_delta: bs.lobe.is_delta(),
-                };
-                ray = si.spawn_ray(si.frame.to_world(bs.wo));
-            }
-
-            // ---- Russian roulette (path.cpp: q = min(max(β)·η², 0.95)) ----
-            depth += 1;
-            let beta_max = max_component(beta);
-            if depth >= self.rr_depth {
-                let q = (beta_max * eta * eta).min(0.95);
-                sampler.seek(block + layout::ROULETTE);
-                if !(sampler.next_1d() < q) {
-                    break;
-                }
-                beta /= q;
-            }
-            if beta_max == 0.0 {
-                break;
+            if !goes_on {
+                return path.result;
             }
         }
-        result
+    }
+
+    /// A path leaving the camera along `ray`; `None` when `max_depth` is 0 (nothing is seen).
+    #[inline]
+    pub(crate) fn start(&self, ray: Ray) -> Option<PathState> {
+        (self.max_depth != 0).then_some(PathState {
+            ray,
+            result: Spectrum::ZERO,
+            beta: Spectrum::ONE,
+            eta: 1.0,
+            depth: 0,
+            // The ray is the camera's, or continues it through null surfaces only.
+            primary: true,
+            // A camera ray counts as "delta" so that emitters it sees directly get full weight.
+            prev: PrevVertex {
+                p: ray.o,
+                n: Vec3::ZERO,
+                bsdf_pdf: 1.0,
+                bsdf_delta: true,
+            },
+        })
+    }
+
+    /// One step of the path at `hit`, the closest hit of `path.ray` (already traced and
+    /// counted): the emission found there, a next-event estimate (returned, for its shadow ray
+    /// to be traced and [`PendingShadow::resolve`]d before the next step), the BSDF sample
+    /// that gives the next ray, and Russian roulette. Returns false when the path ends here.
+    #[inline]
+    pub(crate) fn bounce<S: Sampler>(
+        &self,
+        scene: &Scene,
+        path: &mut PathState,
+        mut hit: Option<SurfaceInteraction>,
+        sampler: &mut SampleStream<'_, S>,
+        stats: &mut PathStats,
+    ) -> (Option<PendingShadow>, bool) {
+        if self.hide_emitters && path.primary {
+            hit = skip_area_emitters(scene, &mut path.ray, hit, stats);
+        }
+        let Some(si) = hit else {
+            // ---- Escaped: environment emission (none without an environment) ----
+            // With hide_emitters an escaped camera ray gives 0 (path.cpp's `valid_ray`).
+            if let Some(env) = scene.environment {
+                if !(self.hide_emitters && path.primary) {
+                    let emitter = &scene.emitters[env as usize];
+                    let le = emitter.eval_environment(path.ray.d);
+                    let w = self.mis_emitter_hit(scene, env, None, path.ray.d, &path.prev);
+                    path.result += path.beta * le * w;
+                }
+            }
+            return (None, false);
+        };
+
+        // ---- Emission of the surface that was hit ----
+        // (With hide_emitters, camera rays never stop at an emitter: see above.)
+        if let Some((ei, emitter)) = scene.surface_emitter(&si) {
+            let le = emitter.eval_surface(&si);
+            if le != Spectrum::ZERO {
+                let w = self.mis_emitter_hit(scene, ei, Some(&si), path.ray.d, &path.prev);
+                path.result += path.beta * le * w;
+            }
+        }
+
+        if path.depth + 1 >= self.max_depth {
+            return (None, false);
+        }
+
+        let bsdf = scene.bsdf(&si);
+        let sp = scene.shading_point(&si);
+        let depth = path.depth;
+
+        // ---- Emitter sampling (next-event estimation) ----
+        let mut shadow = None;
+        if bsdf.flags().has_smooth() && self.has_lights {
+            sampler.seek(layout::bounce(depth) + layout::LIGHT_POSITION);
+            // Shadow rays may cross null surfaces, each a bounce (see the module docs).
+            let crossings = self.max_depth.saturating_sub(depth + 2);
+            shadow = self.sample_emitter(scene, &si, &sp, bsdf, crossings, path.beta, sampler);
+            match shadow {
+                Some(_) => stats.rays += 1,
+                // Nothing to trace: the estimate is 0, added as the full estimate would be
+                // (β · 0 is not 0 for a β that is not finite).
+                None => path.result += path.beta * Spectrum::ZERO,
+            }
+        }
+
+        // ---- BSDF sampling ----
+        let block = layout::bounce(depth);
+        sampler.seek(block + layout::BSDF_DIRECTION);
+        let u2 = sampler.next_2d();
+        // A value nothing reads is not drawn (the layout fixes every other one).
+        let u1 = if bsdf.samples_lobe() {
+            sampler.next_1d()
+        } else {
+            0.5
+        };
+        let Some(bs) = bsdf.sample(&sp, si.wi, u1, u2) else {
+            return (shadow, false);
+        };
+        if bs.weight == Spectrum::ZERO {
+            return (shadow, false);
+        }
+        path.beta *= bs.weight;
+        path.eta *= bs.eta;
+        if bs.lobe.is_null() {
+            // Straight on (exactly along the ray, not −wi through the frames); `prev`
+            // stays where the path last scattered.
+            path.ray = si.spawn_ray(path.ray.d);
+        } else {
+            path.primary = false;
+            path.prev = PrevVertex {
+                p: si.p,
+                n: si.frame.n,
+                bsdf_pdf: bs.pdf,
+                bsdf_delta: bs.lobe.is_delta(),
+            };
+            path.ray = si.spawn_ray(si.frame.to_world(bs.wo));
+        }
+
+        // ---- Russian roulette (path.cpp: q = min(max(β)·η², 0.95)) ----
+        path.depth += 1;
+        let beta_max = max_component(path.beta);
+        if path.depth >= self.rr_depth {
+            let q = (beta_max * path.eta * path.eta).min(0.95);
+            sampler.seek(block + layout::ROULETTE);
+            if !(sampler.next_1d() < q) {
+                return (shadow, false);
+            }
+            path.beta /= q;
+        }
+        (shadow, beta_max != 0.0)
     }
 
     /// MIS weight of emission found by BSDF sampling from `prev`: the emitter's density
@@ -231,8 +268,9 @@ impl PathIntegrator {
         power_heuristic(prev.bsdf_pdf, pdf_em)
     }
 
-    /// One next-event estimation sample: L·f·cos / pdf with the MIS weight, times the
-    /// shadow ray's transmittance (through at most `crossings` null surfaces).
+    /// One next-event estimation sample up to its shadow ray: L·f·cos / pdf with the MIS
+    /// weight, to be multiplied by the shadow ray's transmittance (through at most
+    /// `crossings` null surfaces). `None` when the estimate is 0 whatever the shadow ray.
     /// Delta lights need no MIS (BSDF sampling never finds them), so no BSDF pdf either.
     #[inline]
     #[allow(clippy::too_many_arguments)]
@@ -243,9 +281,9 @@ impl PathIntegrator {
         sp: &ShadingPoint,
         bsdf: &radia_bsdf::Bsdf,
         crossings: u32,
+        beta: Spectrum,
         sampler: &mut SampleStream<'_, S>,
-        stats: &mut PathStats,
-    ) -> Spectrum {
+    ) -> Option<PendingShadow> {
         let u = sampler.next_2d();
         let u_sel = if scene.lights.choice_uses_sample() {
             sampler.next_1d()
@@ -256,9 +294,7 @@ impl PathIntegrator {
             p: si.p,
             n: si.frame.n,
         };
-        let Some(es) = scene.sample_emitter_direction(&ctx, u_sel, u) else {
-            return Spectrum::ZERO;
-        };
+        let es = scene.sample_emitter_direction(&ctx, u_sel, u)?;
         let wo = si.frame.to_local(es.d);
         let (f, w) = if es.is_delta {
             (bsdf.eval(sp, si.wi, wo), 1.0)
@@ -267,15 +303,58 @@ impl PathIntegrator {
             (f, power_heuristic(es.pdf, bsdf_pdf))
         };
         if f == Spectrum::ZERO {
-            return Spectrum::ZERO;
+            return None;
         }
-        let shadow = si.shadow_ray(&es);
-        stats.rays += 1;
-        let transmittance = scene.transmittance(&shadow, crossings);
-        if transmittance == 0.0 {
-            return Spectrum::ZERO;
-        }
-        f * es.radiance * (w * transmittance / es.pdf)
+        Some(PendingShadow {
+            ray: si.shadow_ray(&es),
+            crossings,
+            beta,
+            f_radiance: f * es.radiance,
+            w,
+            pdf: es.pdf,
+        })
+    }
+}
+
+/// One path in flight: what [`PathIntegrator::li`]'s loop carries from bounce to bounce.
+#[derive(Clone, Copy)]
+pub(crate) struct PathState {
+    /// The ray to trace next.
+    pub ray: Ray,
+    /// Radiance gathered so far.
+    pub result: Spectrum,
+    beta: Spectrum,
+    /// Product of the relative IORs crossed (for Russian roulette).
+    eta: f32,
+    depth: u32,
+    primary: bool,
+    prev: PrevVertex,
+}
+
+/// A next-event estimate waiting for its shadow ray.
+#[derive(Clone, Copy)]
+pub(crate) struct PendingShadow {
+    pub ray: Ray,
+    /// Null surfaces the shadow ray may cross.
+    pub crossings: u32,
+    /// The path's throughput at the vertex.
+    beta: Spectrum,
+    /// f · L, the MIS weight and the light sample's density.
+    f_radiance: Spectrum,
+    w: f32,
+    pdf: f32,
+}
+
+impl PendingShadow {
+    /// Adds the estimate to `path` now that the shadow ray's transmittance is known.
+    #[inline]
+    pub(crate) fn resolve(&self, path: &mut PathState, transmittance: f32) {
+        let estimate = if transmittance == 0.0 {
+            Spectrum::ZERO
+        } else {
+            self.f_radiance * (self.w * transmittance / self.pdf)
+        };
+        path.result += self.beta * estimate;
     }
 }
 
