@@ -1,12 +1,20 @@
-//! What the tile loop asks of an integrator: the radiance estimate of one camera ray. The
-//! renderer picks the integrator once per render, so each compiles into its own tile loop
-//! (a generic, not a `dyn` call per sample).
+//! What the tile loop asks of an integrator: the radiance estimates of a tile's camera
+//! samples. The renderer picks the integrator once per render, so each compiles into its own
+//! tile loop (a generic, not a `dyn` call per sample).
 
 use crate::path::{PathIntegrator, PathStats};
 use glam::Vec2;
 use radia_math::{Ray, Spectrum};
 use radia_sampling::{SampleStream, Sampler};
 use radia_scene::Scene;
+
+/// One camera sample: its film position in pixels, its ray, and its sample stream (past the
+/// film's dimensions).
+pub(crate) struct CameraSample<'a, S> {
+    pub pos: Vec2,
+    pub ray: Ray,
+    pub stream: SampleStream<'a, S>,
+}
 
 pub(crate) trait Integrator: Sync {
     /// Radiance arriving at the camera along `ray`; `pos` is the sample's film position in
@@ -19,6 +27,25 @@ pub(crate) trait Integrator: Sync {
         sampler: &mut SampleStream<'_, S>,
         stats: &mut PathStats,
     ) -> Spectrum;
+
+    /// The radiance of the camera samples `sample(0)`, …, `sample(out.len() - 1)`, with
+    /// their film positions, into `out` in that order. One [`Integrator::li`] after another
+    /// unless the integrator runs many samples at once.
+    fn li_many<'a, S: Sampler + 'a>(
+        &self,
+        scene: &Scene,
+        sample: impl Fn(usize) -> CameraSample<'a, S>,
+        out: &mut [(Vec2, Spectrum)],
+        stats: &mut PathStats,
+    ) {
+        for (i, o) in out.iter_mut().enumerate() {
+            let mut cs = sample(i);
+            *o = (
+                cs.pos,
+                self.li(scene, cs.ray, cs.pos, &mut cs.stream, stats),
+            );
+        }
+    }
 }
 
 impl Integrator for PathIntegrator {
@@ -32,5 +59,16 @@ impl Integrator for PathIntegrator {
         stats: &mut PathStats,
     ) -> Spectrum {
         PathIntegrator::li(self, scene, ray, sampler, stats)
+    }
+
+    /// Sixteen paths at a time, their rays traced together (`crate::wavefront`).
+    fn li_many<'a, S: Sampler + 'a>(
+        &self,
+        scene: &Scene,
+        sample: impl Fn(usize) -> CameraSample<'a, S>,
+        out: &mut [(Vec2, Spectrum)],
+        stats: &mut PathStats,
+    ) {
+        crate::wavefront::li_many(self, scene, sample, out, stats)
     }
 }

@@ -9,6 +9,7 @@ pub mod npr;
 pub mod part;
 pub mod path;
 mod renderer;
+mod wavefront;
 
 pub use aov::AovLayers;
 pub use film::{Film, Image};

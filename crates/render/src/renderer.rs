@@ -13,7 +13,7 @@
 use crate::aov::{AovFilm, AovIntegrator, AovLayers};
 use crate::classic::ClassicIntegrator;
 use crate::film::{Film, Filter, Image};
-use crate::integrator::Integrator;
+use crate::integrator::{CameraSample, Integrator};
 use crate::npr::NprIntegrator;
 use crate::path::{layout, PathIntegrator, PathStats};
 use glam::{UVec2, Vec2};
@@ -250,6 +250,9 @@ impl Job<'_> {
 /// What a render records per sample beside the image. The tile loop is generic over it, so
 /// that a render without AOVs ([`NoExtras`]) compiles to the loop it had before they existed.
 trait Extras: Sync {
+    /// Whether [`Extras::add`] records something per sample: the samples are then rendered
+    /// one at a time beside it, else the integrator takes a tile's samples at once.
+    const PER_SAMPLE: bool;
     /// A tile's accumulation.
     type Film: Send;
     fn film(&self, x0: i32, y0: i32, w: u32, h: u32, filter: Filter) -> Self::Film;
@@ -263,6 +266,7 @@ trait Extras: Sync {
 struct NoExtras;
 
 impl Extras for NoExtras {
+    const PER_SAMPLE: bool = false;
     type Film = ();
     #[inline(always)]
     fn film(&self, _: i32, _: i32, _: u32, _: u32, _: Filter) {}
@@ -277,6 +281,7 @@ impl Extras for NoExtras {
 }
 
 impl Extras for AovIntegrator<'_> {
+    const PER_SAMPLE: bool = true;
     /// The tile's AOV film and a buffer for one sample's values.
     type Film = (AovFilm, Vec<f32>);
     fn film(&self, x0: i32, y0: i32, w: u32, h: u32, filter: Filter) -> Self::Film {
@@ -349,7 +354,38 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
                 let mut tile_extras = extras.film(fx, fy, fw, fh, filter);
                 let mut pstats = PathStats::default();
                 let mut invalid = 0;
-                for y in y0..y0 + th {
+                if !E::PER_SAMPLE {
+                    // The tile's samples in pixel order, handed to the integrator at once
+                    // (the path integrator runs many of them together), then added to the
+                    // film in that order.
+                    let nspp = (spp_end - spp_start) as usize;
+                    let mut out = vec![(Vec2::ZERO, Spectrum::ZERO); (tw * th) as usize * nspp];
+                    let sample = |i: usize| {
+                        let p = (i / nspp) as u32;
+                        let (x, y) = (x0 + p % tw, y0 + p / tw);
+                        let key = PixelKey::new(seed, UVec2::new(x, y));
+                        let mut stream =
+                            SampleStream::new(sampler, key, spp_start + (i % nspp) as u32);
+                        stream.seek(layout::FILM);
+                        let pos = Vec2::new(x as f32, y as f32) + stream.next_2d();
+                        let ray = scene
+                            .camera
+                            .generate_ray(pos / Vec2::new(w as f32, h as f32));
+                        CameraSample { pos, ray, stream }
+                    };
+                    integrator.li_many(scene, sample, &mut out, &mut pstats);
+                    for &(pos, l) in &out {
+                        if l.is_finite() {
+                            tile_film.add_sample(pos, l);
+                        } else {
+                            invalid += 1;
+                        }
+                    }
+                    if cancel.load(Ordering::Relaxed) {
+                        return None;
+                    }
+                }
+                for y in (y0..y0 + th).filter(|_| E::PER_SAMPLE) {
                     for x in x0..x0 + tw {
                         let key = PixelKey::new(seed, UVec2::new(x, y));
                         for s in spp_start..spp_end {

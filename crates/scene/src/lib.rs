@@ -190,6 +190,12 @@ impl Scene {
         if !self.occluded(ray) {
             return 1.0;
         }
+        self.transmittance_of_blocked(ray, max_crossings)
+    }
+
+    /// [`Scene::transmittance`] of a shadow ray known to be blocked ([`Scene::occluded`]).
+    #[inline]
+    pub fn transmittance_of_blocked(&self, ray: &Ray, max_crossings: u32) -> f32 {
         if !self.has_null_surfaces {
             return 0.0;
         }
