@@ -11,6 +11,13 @@
 //!   geometric normal on the side the ray came from (incoherent, as second bounces).
 //! * `shadow`: segments between two random camera-ray hit points, stopping short of the
 //!   target as a shadow ray does (incoherent; a mix of occluded and free).
+//! * `light`: from the hit of each camera ray (a miss: a random hit) to a random point on a
+//!   square area light (Cornell box: its light; million: a 1 m square at y = 4 above
+//!   everything), as next-event estimation's shadow rays.
+//!
+//! The `*_packet` benches trace the same sets as 16-ray packets ([`RayPacket`]): camera,
+//! bounce and light rays grouped by 4×4 pixel tiles (the rays of a tile's paths, as a
+//! many-paths-at-once path loop has them), shadow segments 16 consecutive ones.
 //!
 //! Every iteration traces the whole set; divan's item counter makes the throughput read as
 //! rays per second (Mitem/s = Mrays/s). Single thread.
@@ -26,8 +33,8 @@ use radia_formats::load_mitsuba_xml;
 use radia_math::{Frame, Ray};
 use radia_sampling::warp::{square_to_cosine_hemisphere, square_to_uniform_sphere};
 use radia_scene::{
-    look_at, CameraDesc, FilmDesc, Geometry, IntegratorDesc, Mesh, SamplerDesc, Scene,
-    SceneDescription, ShapeDesc,
+    look_at, CameraDesc, FilmDesc, Geometry, IntegratorDesc, Mesh, RayPacket, SamplerDesc, Scene,
+    SceneDescription, ShapeDesc, PACKET_LANES,
 };
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
@@ -50,13 +57,20 @@ struct Bench {
     camera: Vec<Ray>,
     bounce: Vec<Ray>,
     shadow: Vec<Ray>,
+    light: Vec<Ray>,
+    camera_packets: Vec<RayPacket>,
+    bounce_packets: Vec<RayPacket>,
+    shadow_packets: Vec<RayPacket>,
+    light_packets: Vec<RayPacket>,
 }
 
 static CORNELL: LazyLock<Bench> = LazyLock::new(|| {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.xml");
     let defines = [("res".to_string(), FILM.to_string())];
     let desc = load_mitsuba_xml(&path, &defines).expect("cannot load cornell-box.xml");
-    Bench::new("cornell", Scene::build(desc), 1)
+    // The light: a 0.5 m square at y = 1.98.
+    let light = [Vec3::new(-0.25, 1.98, -0.25), Vec3::X * 0.5, Vec3::Z * 0.5];
+    Bench::new("cornell", Scene::build(desc), 1, light)
 });
 
 static MILLION: LazyLock<Bench> = LazyLock::new(|| {
@@ -88,7 +102,8 @@ static MILLION: LazyLock<Bench> = LazyLock::new(|| {
         world_origin: glam::DVec3::ZERO,
         sampling_weights: Default::default(),
     };
-    Bench::new("million", Scene::build(desc), 2)
+    let light = [Vec3::new(-0.5, 4.0, -0.5), Vec3::X, Vec3::Z];
+    Bench::new("million", Scene::build(desc), 2, light)
 });
 
 fn shape(mesh: Mesh) -> ShapeDesc {
@@ -165,7 +180,8 @@ fn soup(rng: &mut Pcg64, n: usize) -> Mesh {
 }
 
 impl Bench {
-    fn new(name: &str, scene: Scene, seed: u64) -> Self {
+    /// `light`: a corner of the light square and its two edges.
+    fn new(name: &str, scene: Scene, seed: u64, light: [Vec3; 3]) -> Self {
         let mut rng = Pcg64::seed_from_u64(seed);
         let mut camera = Vec::with_capacity((FILM * FILM) as usize);
         for y in 0..FILM {
@@ -203,25 +219,43 @@ impl Bench {
                 }
             })
             .collect();
+        let light: Vec<Ray> = camera
+            .iter()
+            .map(|ray| {
+                let si = scene
+                    .intersect(ray)
+                    .unwrap_or_else(|| hits[rng.random_range(0..hits.len())]);
+                let target =
+                    light[0] + light[1] * rng.random::<f32>() + light[2] * rng.random::<f32>();
+                si.spawn_ray_to(target)
+            })
+            .collect();
         let bounce_hits = bounce
             .iter()
             .filter(|r| scene.intersect(r).is_some())
             .count();
         let occluded = shadow.iter().filter(|r| scene.occluded(r)).count();
+        let light_occluded = light.iter().filter(|r| scene.occluded(r)).count();
         eprintln!(
             "{name}: {} primitives, {} rays per set; hits: camera {:.0} %, bounce {:.0} %; \
-             shadow rays occluded {:.0} %",
+             occluded: shadow {:.0} %, light {:.0} %",
             scene.primitive_count(),
             camera.len(),
             100.0 * hits.len() as f64 / camera.len() as f64,
             100.0 * bounce_hits as f64 / bounce.len() as f64,
             100.0 * occluded as f64 / shadow.len() as f64,
+            100.0 * light_occluded as f64 / light.len() as f64,
         );
         Self {
+            camera_packets: tiles(&camera),
+            bounce_packets: tiles(&bounce),
+            shadow_packets: shadow.chunks(PACKET_LANES).map(packet).collect(),
+            light_packets: tiles(&light),
             scene,
             camera,
             bounce,
             shadow,
+            light,
         }
     }
 
@@ -230,9 +264,43 @@ impl Bench {
             "camera" => &self.camera,
             "bounce" => &self.bounce,
             "shadow" => &self.shadow,
+            "light" => &self.light,
             _ => unreachable!(),
         }
     }
+
+    fn packets(&self, name: &str) -> &[RayPacket] {
+        match name {
+            "camera" => &self.camera_packets,
+            "bounce" => &self.bounce_packets,
+            "shadow" => &self.shadow_packets,
+            "light" => &self.light_packets,
+            _ => unreachable!(),
+        }
+    }
+}
+
+/// A packet of up to 16 rays.
+fn packet(rays: &[Ray]) -> RayPacket {
+    let mut p = RayPacket::new();
+    for (lane, r) in rays.iter().enumerate() {
+        p.set(lane, r);
+    }
+    p
+}
+
+/// Rays given per pixel of the film (row by row) as packets of 4×4 pixel tiles.
+fn tiles(rays: &[Ray]) -> Vec<RayPacket> {
+    let mut out = Vec::with_capacity(rays.len() / PACKET_LANES);
+    for ty in (0..FILM).step_by(4) {
+        for tx in (0..FILM).step_by(4) {
+            let tile: Vec<Ray> = (0..16)
+                .map(|l| rays[((ty + l / 4) * FILM + tx + l % 4) as usize])
+                .collect();
+            out.push(packet(&tile));
+        }
+    }
+    out
 }
 
 /// The three benches for one scene, in a module named after it (divan names benches by
@@ -260,10 +328,36 @@ macro_rules! scene_benches {
 
             /// `Scene::occluded` (any hit): camera rays (mostly blocked, early exit) and
             /// shadow segments.
-            #[divan::bench(args = ["camera", "shadow"])]
+            #[divan::bench(args = ["camera", "shadow", "light"])]
             fn occluded(bencher: Bencher, set: &str) {
                 run(bencher, &$data, set, |b, r| {
                     black_box(b.scene.occluded(r));
+                });
+            }
+
+            /// `Scene::intersect_packet`: the same rays as `closest_hit`, 16 at a time.
+            #[divan::bench(args = ["camera", "bounce"])]
+            fn closest_hit_packet(bencher: Bencher, set: &str) {
+                run_packets(bencher, &$data, set, |b, p| {
+                    let mut out = [None; PACKET_LANES];
+                    b.scene.intersect_packet(p, &mut out);
+                    black_box(out);
+                });
+            }
+
+            /// `Accel::intersect_packet`: the same rays as `closest_hit_accel`.
+            #[divan::bench(args = ["camera", "bounce"])]
+            fn closest_hit_accel_packet(bencher: Bencher, set: &str) {
+                run_packets(bencher, &$data, set, |b, p| {
+                    black_box(b.scene.accel().intersect_packet(&b.scene.shapes, p));
+                });
+            }
+
+            /// `Scene::occluded_packet`: the same rays as `occluded`.
+            #[divan::bench(args = ["camera", "shadow", "light"])]
+            fn occluded_packet(bencher: Bencher, set: &str) {
+                run_packets(bencher, &$data, set, |b, p| {
+                    black_box(b.scene.occluded_packet(p));
                 });
             }
         }
@@ -278,6 +372,17 @@ fn run(bencher: Bencher, b: &Bench, set: &str, f: impl Fn(&Bench, &Ray) + Sync) 
     bencher.counter(ItemsCount::new(rays.len())).bench(|| {
         for r in black_box(rays) {
             f(b, r);
+        }
+    });
+}
+
+/// As [`run`], over the set's packets; the counter is in rays.
+fn run_packets(bencher: Bencher, b: &Bench, set: &str, f: impl Fn(&Bench, &RayPacket) + Sync) {
+    let packets = b.packets(set);
+    let rays: usize = packets.iter().map(|p| p.active.count_ones() as usize).sum();
+    bencher.counter(ItemsCount::new(rays)).bench(|| {
+        for p in black_box(packets) {
+            f(b, p);
         }
     });
 }

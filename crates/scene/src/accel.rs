@@ -2,7 +2,10 @@
 //! watertight triangle intersection and analytic spheres and disks.
 
 mod chunked;
+mod packet;
 mod wide;
+
+pub use packet::{PacketHits, RayPacket, PACKET_LANES};
 
 use crate::shape::{Instance, Shape, ShapeKind};
 use glam::{UVec2, Vec2, Vec3};
@@ -168,7 +171,7 @@ pub struct Hit {
     /// Triangle: barycentrics (b1, b2) of vertices 1 and 2, also of an instance's triangle.
     /// Analytic shapes: unused.
     pub bary: Vec2,
-    /// Of an instance: the primitive hit in its group's BVH (unused otherwise).
+    /// Of an instance: the primitive hit in its group's BVH (0 otherwise).
     pub inner: u32,
 }
 
@@ -610,6 +613,10 @@ impl Accel {
                         t_max = h.t[l];
                         best = Some(((base + l) as u32, t_max));
                         found.bary = Vec2::new(h.b1[l], h.b2[l]);
+                        // Not an instance: no inner primitive (rather than that of an
+                        // instance hit farther away earlier), so that `Hit::inner` does not
+                        // depend on the order in which primitives were met.
+                        found.inner = 0;
                     }
                 }
                 let mut one_by_one = analytic | h.exact;

@@ -13,7 +13,7 @@ pub mod memory;
 pub mod shape;
 mod spherical;
 
-pub use accel::{Accel, Hit};
+pub use accel::{Accel, Hit, PacketHits, RayPacket, PACKET_LANES};
 pub use camera::{look_at, Camera};
 pub use description::*;
 pub use emitter::{Emitter, EmitterSample};
@@ -142,11 +142,34 @@ impl Scene {
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceInteraction> {
         let hit = self.accel.intersect(&self.shapes, ray)?;
+        Some(self.interaction(&hit, ray))
+    }
+
+    /// Per active lane of `rays` the closest surface (None where the ray escapes or the lane
+    /// is inactive): what [`Scene::intersect`] gives for that lane's ray (when two surfaces
+    /// are hit at exactly the same distance, possibly the other one;
+    /// [`Accel::intersect_packet`]).
+    pub fn intersect_packet(
+        &self,
+        rays: &RayPacket,
+        out: &mut [Option<SurfaceInteraction>; PACKET_LANES],
+    ) {
+        let hits = self.accel.intersect_packet(&self.shapes, rays);
+        for (lane, si) in out.iter_mut().enumerate() {
+            *si = hits
+                .hit(lane)
+                .map(|hit| self.interaction(&hit, &rays.ray(lane)));
+        }
+    }
+
+    /// The surface interaction of `hit`, found for `ray`.
+    #[inline(always)]
+    fn interaction(&self, hit: &Hit, ray: &Ray) -> SurfaceInteraction {
         let prim = self.accel.primitive(&self.shapes, hit.prim as usize);
         if let accel::Primitive::Instance { shape } = prim {
-            return Some(self.instance_interaction(shape, &hit, ray));
+            return self.instance_interaction(shape, hit, ray);
         }
-        Some(self.shapes[prim.shape() as usize].interaction(&hit, &prim, ray.o, ray.d))
+        self.shapes[prim.shape() as usize].interaction(hit, &prim, ray.o, ray.d)
     }
 
     /// The interaction at `hit` on instance `instance`: found in its group's space, with the
@@ -173,6 +196,13 @@ impl Scene {
     #[inline]
     pub fn occluded(&self, ray: &Ray) -> bool {
         self.accel.occluded(&self.shapes, ray)
+    }
+
+    /// Bit i set when the ray of lane i of `rays` is blocked before its t_max
+    /// ([`Scene::occluded`] per lane; inactive lanes clear).
+    #[inline]
+    pub fn occluded_packet(&self, rays: &RayPacket) -> u32 {
+        self.accel.occluded_packet(&self.shapes, rays)
     }
 
     /// The fraction of light that arrives along the shadow ray `ray`: 1 when nothing blocks

@@ -308,6 +308,24 @@ pub fn traverse<F>(
     ray: &NodeRay,
     t_max: f32,
     any_hit: bool,
+    leaves: F,
+    stack: &mut [std::mem::MaybeUninit<UVec2>],
+) -> Option<(u32, f32)>
+where
+    F: FnMut(u32, u32, f32) -> Option<(u32, f32)>,
+{
+    traverse_from(bvh, 0, ray, t_max, any_hit, leaves, stack)
+}
+
+/// [`traverse`] of the subtree under node `root` only: how a ray packet hands a subtree that
+/// few of its rays reached to the single-ray traversal (`packet.rs`).
+#[inline(always)]
+pub fn traverse_from<F>(
+    bvh: &CwBvh,
+    root: u32,
+    ray: &NodeRay,
+    t_max: f32,
+    any_hit: bool,
     mut leaves: F,
     stack: &mut [std::mem::MaybeUninit<UVec2>],
 ) -> Option<(u32, f32)>
@@ -321,8 +339,9 @@ where
     let mut best = None;
     let stack = stack.as_mut_ptr() as *mut UVec2;
     let mut sp = 0usize;
-    // (child base index, hit bits in the high byte | imask); the root is inner child 0.
-    let mut node_group = UVec2::new(0, 0x8000_0000);
+    // (child base index, hit bits in the high byte | imask): the start is a group whose one
+    // hit child is `root` (with no inner sibling below it, its index is the group's base).
+    let mut node_group = UVec2::new(root, 0x8000_0000);
     loop {
         // Here the group always holds at least one inner child that was hit.
         let hits = node_group.y;

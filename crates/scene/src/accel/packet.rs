@@ -1,0 +1,665 @@
+//! Ray packets: closest hit and occlusion for up to 16 rays at once over the scene's BVH, for
+//! the path loop that advances many paths together.
+//!
+//! The packet walks the compressed BVH8 ([`wide`]) as in Wald, Slusallek, Benthin and Wagner
+//! 2001 ("Interactive Rendering with Coherent Ray Tracing") widened to 16 rays: at each node
+//! every child box is tested against all the packet's lanes at once (one AVX-512 slab test
+//! per child, rays in lanes, with the single-ray node test's arithmetic and conservative
+//! slack lane by lane), the inner children hit by any lane are pushed with the lanes that hit
+//! them, in the order of the first lane's octant, and a leaf's triangles are tested one at a
+//! time broadcast against the rays in lanes, with the watertight test's operations in the
+//! single-ray order. Incoherent rays share few nodes, so, as in Benthin, Wald, Woop, Ernst
+//! and Mark 2012 ("Combining Single and Packet-Ray Tracing for Arbitrary Ray Distributions
+//! on the Intel MIC Architecture"), a subtree reached by few lanes is finished by the
+//! single-ray traversal of each of them ([`SINGLE_AT_MOST`]), and a leaf reached by few lanes
+//! is tested by each lane's 8-wide triangle test ([`LEAF_PACKET_FROM`]).
+//!
+//! Answers are those of [`Accel::intersect`] and [`Accel::occluded`] lane by lane: every
+//! primitive test computes the single-ray test's bits, and a lane visits every node whose
+//! box its own ray test passes. The one difference: when two primitives are hit at exactly
+//! the same distance, the packet may report the other one (the order in which a lane meets
+//! primitives differs), with the same `t`.
+//!
+//! Analytic shapes, instances (whose groups are traced by the single-ray query) and
+//! triangles whose single-precision edge functions are exactly zero (decided in double
+//! precision) are tested lane by lane with the scalar code. Without AVX-512 at compile time
+//! a packet is traced as its rays one at a time.
+
+use super::{Accel, Hit};
+use crate::shape::Shape;
+use glam::{Vec2, Vec3};
+use radia_math::Ray;
+
+/// Rays in a packet.
+pub const PACKET_LANES: usize = 16;
+
+/// Up to 16 rays, structure of arrays; lanes whose bit is clear in `active` are ignored.
+#[derive(Clone, Copy, Debug)]
+pub struct RayPacket {
+    /// Origins: `o[axis][lane]`.
+    pub o: [[f32; PACKET_LANES]; 3],
+    /// Directions: `d[axis][lane]`.
+    pub d: [[f32; PACKET_LANES]; 3],
+    pub t_max: [f32; PACKET_LANES],
+    /// Bit i: lane i holds a ray.
+    pub active: u32,
+}
+
+impl RayPacket {
+    /// A packet with no active lane.
+    pub fn new() -> Self {
+        Self {
+            o: [[0.0; PACKET_LANES]; 3],
+            d: [[0.0; PACKET_LANES]; 3],
+            t_max: [0.0; PACKET_LANES],
+            active: 0,
+        }
+    }
+
+    /// Puts `ray` in lane `lane` and activates it.
+    #[inline]
+    pub fn set(&mut self, lane: usize, ray: &Ray) {
+        for axis in 0..3 {
+            self.o[axis][lane] = ray.o[axis];
+            self.d[axis][lane] = ray.d[axis];
+        }
+        self.t_max[lane] = ray.t_max;
+        self.active |= 1 << lane;
+    }
+
+    /// The ray in lane `lane` (whether active or not).
+    #[inline]
+    pub fn ray(&self, lane: usize) -> Ray {
+        Ray::new(
+            Vec3::new(self.o[0][lane], self.o[1][lane], self.o[2][lane]),
+            Vec3::new(self.d[0][lane], self.d[1][lane], self.d[2][lane]),
+            self.t_max[lane],
+        )
+    }
+}
+
+impl Default for RayPacket {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Per lane the closest hit, as [`Accel::intersect`] would give it. Lanes without a hit
+/// (bit clear in `hit`) hold their ray's `t_max` in `t` and zeros elsewhere.
+#[derive(Clone, Copy, Debug)]
+pub struct PacketHits {
+    /// Bit i: lane i hit something.
+    pub hit: u32,
+    pub t: [f32; PACKET_LANES],
+    pub prim: [u32; PACKET_LANES],
+    pub bary: [Vec2; PACKET_LANES],
+    pub inner: [u32; PACKET_LANES],
+}
+
+impl PacketHits {
+    /// Lane `lane`'s hit, if it has one.
+    #[inline]
+    pub fn hit(&self, lane: usize) -> Option<Hit> {
+        (self.hit & (1 << lane) != 0).then(|| Hit {
+            t: self.t[lane],
+            prim: self.prim[lane],
+            bary: self.bary[lane],
+            inner: self.inner[lane],
+        })
+    }
+}
+
+/// The running state of a packet query, per lane (64-byte aligned rows for the masked
+/// vector stores).
+#[repr(C, align(64))]
+struct State {
+    /// The closest hit so far, or the ray's t_max.
+    t: [f32; PACKET_LANES],
+    b1: [f32; PACKET_LANES],
+    b2: [f32; PACKET_LANES],
+    prim: [u32; PACKET_LANES],
+    inner: [u32; PACKET_LANES],
+    /// Lanes that hit something.
+    hit: u32,
+    /// Lanes still searching: the active ones, minus (for occlusion) those already blocked.
+    live: u32,
+}
+
+impl State {
+    fn new(rays: &RayPacket) -> Self {
+        Self {
+            t: rays.t_max,
+            b1: [0.0; PACKET_LANES],
+            b2: [0.0; PACKET_LANES],
+            prim: [0; PACKET_LANES],
+            inner: [0; PACKET_LANES],
+            hit: 0,
+            live: rays.active & 0xffff,
+        }
+    }
+
+    /// Lane `l`'s new closest (for occlusion: first) hit.
+    #[inline(always)]
+    fn record<const ANY_HIT: bool>(&mut self, l: usize, prim: u32, t: f32, bary: Vec2, inner: u32) {
+        self.t[l] = t;
+        self.prim[l] = prim;
+        self.b1[l] = bary.x;
+        self.b2[l] = bary.y;
+        self.inner[l] = inner;
+        self.hit |= 1 << l;
+        if ANY_HIT {
+            self.live &= !(1 << l);
+        }
+    }
+
+    fn hits(&self) -> PacketHits {
+        PacketHits {
+            hit: self.hit,
+            t: self.t,
+            prim: self.prim,
+            bary: std::array::from_fn(|l| Vec2::new(self.b1[l], self.b2[l])),
+            inner: self.inner,
+        }
+    }
+}
+
+/// Subtrees reached by at most this many lanes are finished by each lane's single-ray
+/// traversal. Measured (`benches/bvh.rs`, see [`Accel::intersect_packet`]).
+const SINGLE_AT_MOST: u32 = 3;
+
+/// Leaves reached by at least this many lanes have their triangles tested against the packet;
+/// fewer lanes test them with their own 8-wide test. Measured as [`SINGLE_AT_MOST`].
+const LEAF_PACKET_FROM: u32 = 4;
+
+impl Accel {
+    /// Per lane the closest hit, as [`Accel::intersect`] gives it for that lane's ray (when
+    /// two primitives are hit at exactly the same distance, possibly the other one).
+    pub fn intersect_packet(&self, shapes: &[Shape], rays: &RayPacket) -> PacketHits {
+        let mut st = State::new(rays);
+        self.packet_query::<false>(shapes, rays, &mut st);
+        st.hits()
+    }
+
+    /// Bit i set when lane i is blocked before its t_max ([`Accel::occluded`] per lane).
+    pub fn occluded_packet(&self, shapes: &[Shape], rays: &RayPacket) -> u32 {
+        let mut st = State::new(rays);
+        self.packet_query::<true>(shapes, rays, &mut st);
+        st.hit
+    }
+
+    #[inline(always)]
+    fn packet_query<const ANY_HIT: bool>(
+        &self,
+        shapes: &[Shape],
+        rays: &RayPacket,
+        st: &mut State,
+    ) {
+        if st.live == 0 || self.is_empty() {
+            return;
+        }
+        #[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
+        {
+            // Deeper trees than the fixed stack allows (pathological geometry, see
+            // `Accel::with_stack`) go ray by ray.
+            if self.flat || self.depth < super::wide::STACK_SIZE {
+                // SAFETY: AVX-512F is available (compile-time check above).
+                unsafe { avx512::query::<ANY_HIT>(self, shapes, rays, st) };
+                return;
+            }
+        }
+        self.lane_by_lane::<ANY_HIT>(shapes, rays, st);
+    }
+
+    /// The packet as its rays one at a time.
+    fn lane_by_lane<const ANY_HIT: bool>(
+        &self,
+        shapes: &[Shape],
+        rays: &RayPacket,
+        st: &mut State,
+    ) {
+        let mut lanes = st.live;
+        while lanes != 0 {
+            let l = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            if let Some(h) = self.query::<ANY_HIT>(shapes, &rays.ray(l)) {
+                st.record::<ANY_HIT>(l, h.prim, h.t, h.bary, h.inner);
+            }
+        }
+    }
+}
+
+#[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
+mod avx512 {
+    use super::*;
+    use crate::accel::{wide, Found, WatertightRay};
+    use obvhs::cwbvh::node::CwBvhNode;
+    use std::arch::x86_64::*;
+
+    /// The node test's relative slack, as `wide`'s (see its `avx2::intersect_node`).
+    const BOX_SLACK: f32 = radia_math::float::gamma(4);
+
+    /// Per-packet constants of the node and triangle tests, lane by lane what `NodeRay` and
+    /// `WatertightRay` hold for one ray.
+    struct PacketRay {
+        o: [__m512; 3],
+        /// 1 / d (±∞ for a zero component), and its magnitude.
+        inv: [__m512; 3],
+        inv_abs: [__m512; 3],
+        /// Lanes whose near plane on this axis is the max plane (1 / d < 0).
+        neg: [__mmask16; 3],
+        /// The watertight frame: o[k_j] and the shear s_j per lane.
+        ok: [__m512; 3],
+        s: [__m512; 3],
+        /// `ksel[j][a]`: lanes whose k_j is axis a (a = 0, 1; the rest have axis 2).
+        ksel: [[__mmask16; 2]; 3],
+        rays: [Ray; PACKET_LANES],
+        wrays: [WatertightRay; PACKET_LANES],
+    }
+
+    impl PacketRay {
+        #[inline(always)]
+        unsafe fn new(p: &RayPacket) -> Self {
+            let rays: [Ray; PACKET_LANES] = std::array::from_fn(|l| p.ray(l));
+            let wrays: [WatertightRay; PACKET_LANES] =
+                std::array::from_fn(|l| WatertightRay::new(&rays[l]));
+            let load = |v: &[f32; PACKET_LANES]| _mm512_loadu_ps(v.as_ptr());
+            let o = [load(&p.o[0]), load(&p.o[1]), load(&p.o[2])];
+            let one = _mm512_set1_ps(1.0);
+            // `NodeRay::new`: Vec3A::ONE / d, per component.
+            let inv = [
+                _mm512_div_ps(one, load(&p.d[0])),
+                _mm512_div_ps(one, load(&p.d[1])),
+                _mm512_div_ps(one, load(&p.d[2])),
+            ];
+            let inv_abs = inv.map(|v| _mm512_abs_ps(v));
+            let zero = _mm512_setzero_ps();
+            let neg = inv.map(|v| _mm512_cmp_ps_mask::<_CMP_LT_OQ>(v, zero));
+            let mut ok = [[0.0f32; PACKET_LANES]; 3];
+            let mut s = [[0.0f32; PACKET_LANES]; 3];
+            let mut ksel = [[0u16; 2]; 3];
+            for (l, w) in wrays.iter().enumerate() {
+                for j in 0..3 {
+                    ok[j][l] = w.o[w.k[j]];
+                    s[j][l] = w.s[j];
+                    if w.k[j] < 2 {
+                        ksel[j][w.k[j]] |= 1 << l;
+                    }
+                }
+            }
+            Self {
+                o,
+                inv,
+                inv_abs,
+                neg,
+                ok: ok.map(|v| load(&v)),
+                s: s.map(|v| load(&v)),
+                ksel,
+                rays,
+                wrays,
+            }
+        }
+
+        /// Coordinate k_j of `p` per lane.
+        #[inline(always)]
+        unsafe fn select(&self, j: usize, p: Vec3) -> __m512 {
+            let yz =
+                _mm512_mask_blend_ps(self.ksel[j][1], _mm512_set1_ps(p.z), _mm512_set1_ps(p.y));
+            _mm512_mask_blend_ps(self.ksel[j][0], yz, _mm512_set1_ps(p.x))
+        }
+    }
+
+    /// The result of one triangle against the lanes.
+    struct TriangleHits {
+        hit: __mmask16,
+        exact: __mmask16,
+        t: __m512,
+        b1: __m512,
+        b2: __m512,
+    }
+
+    /// The watertight test of triangle `p` against the lanes `lanes` of the packet, with the
+    /// operations of `WatertightRay::intersect` in its order (as `wide::intersect_triangles`:
+    /// no FMA, the same products and sums), so every lane gets the scalar test's bits; lanes
+    /// with an exactly zero edge function are reported in `exact`, not decided.
+    #[inline(always)]
+    unsafe fn triangle(
+        r: &PacketRay,
+        p: &[Vec3; 3],
+        lanes: __mmask16,
+        t_max: __m512,
+    ) -> TriangleHits {
+        let shear = |v: Vec3| {
+            let ax = _mm512_sub_ps(r.select(0, v), r.ok[0]);
+            let ay = _mm512_sub_ps(r.select(1, v), r.ok[1]);
+            let az = _mm512_sub_ps(r.select(2, v), r.ok[2]);
+            (
+                _mm512_sub_ps(ax, _mm512_mul_ps(r.s[0], az)),
+                _mm512_sub_ps(ay, _mm512_mul_ps(r.s[1], az)),
+                _mm512_mul_ps(r.s[2], az),
+            )
+        };
+        let (ax, ay, az) = shear(p[0]);
+        let (bx, by, bz) = shear(p[1]);
+        let (cx, cy, cz) = shear(p[2]);
+        let u = _mm512_sub_ps(_mm512_mul_ps(cx, by), _mm512_mul_ps(cy, bx));
+        let v = _mm512_sub_ps(_mm512_mul_ps(ax, cy), _mm512_mul_ps(ay, cx));
+        let w = _mm512_sub_ps(_mm512_mul_ps(bx, ay), _mm512_mul_ps(by, ax));
+        let zero = _mm512_setzero_ps();
+        let exact = _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(u, zero)
+            | _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(v, zero)
+            | _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(w, zero);
+        let neg = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(u, zero)
+            | _mm512_cmp_ps_mask::<_CMP_LT_OQ>(v, zero)
+            | _mm512_cmp_ps_mask::<_CMP_LT_OQ>(w, zero);
+        let pos = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(u, zero)
+            | _mm512_cmp_ps_mask::<_CMP_GT_OQ>(v, zero)
+            | _mm512_cmp_ps_mask::<_CMP_GT_OQ>(w, zero);
+        let det = _mm512_add_ps(_mm512_add_ps(u, v), w);
+        let t_scaled = _mm512_add_ps(
+            _mm512_add_ps(_mm512_mul_ps(u, az), _mm512_mul_ps(v, bz)),
+            _mm512_mul_ps(w, cz),
+        );
+        let inv_det = _mm512_div_ps(_mm512_set1_ps(1.0), det);
+        let t = _mm512_mul_ps(t_scaled, inv_det);
+        let reject = (neg & pos) | _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(det, zero);
+        let in_range =
+            _mm512_cmp_ps_mask::<_CMP_GT_OQ>(t, zero) & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, t_max);
+        TriangleHits {
+            hit: in_range & !(reject | exact) & lanes,
+            exact: exact & lanes,
+            t,
+            b1: _mm512_mul_ps(v, inv_det),
+            b2: _mm512_mul_ps(w, inv_det),
+        }
+    }
+
+    /// Per child of `node`, the lanes of `lanes` whose ray passes the child's box in
+    /// (0, t_max): lane by lane the test of `wide::intersect_node` (the same quantized frame,
+    /// slack, fused multiply-adds and NaN handling), so a lane reaches the children its
+    /// single-ray traversal would reach with the same t_max.
+    #[inline(always)]
+    unsafe fn children(
+        node: &CwBvhNode,
+        r: &PacketRay,
+        lanes: __mmask16,
+        t_max: __m512,
+    ) -> [u16; 8] {
+        let mut scale = [_mm512_setzero_ps(); 3];
+        let mut o_near = [_mm512_setzero_ps(); 3];
+        let mut o_far = [_mm512_setzero_ps(); 3];
+        for a in 0..3 {
+            let step = f32::from_bits((node.e[a] as u32) << 23);
+            let from_origin = _mm512_sub_ps(_mm512_set1_ps(node.p[a]), r.o[a]);
+            scale[a] = _mm512_mul_ps(_mm512_set1_ps(step), r.inv[a]);
+            let offset = _mm512_mul_ps(from_origin, r.inv[a]);
+            let slack = _mm512_mul_ps(
+                _mm512_mul_ps(
+                    _mm512_add_ps(_mm512_abs_ps(from_origin), _mm512_set1_ps(step * 255.0)),
+                    r.inv_abs[a],
+                ),
+                _mm512_set1_ps(BOX_SLACK),
+            );
+            o_near[a] = _mm512_sub_ps(offset, slack);
+            o_far[a] = _mm512_add_ps(offset, slack);
+        }
+        let planes = [
+            (&node.child_min_x, &node.child_max_x),
+            (&node.child_min_y, &node.child_max_y),
+            (&node.child_min_z, &node.child_max_z),
+        ];
+        let mut out = [0u16; 8];
+        for (c, m) in out.iter_mut().enumerate() {
+            if node.child_meta[c] == 0 {
+                continue;
+            }
+            let mut t_near = _mm512_setzero_ps();
+            let mut t_far = t_max;
+            for (a, (lo, hi)) in planes.iter().enumerate() {
+                let (lo, hi) = (_mm512_set1_ps(lo[c] as f32), _mm512_set1_ps(hi[c] as f32));
+                let near = _mm512_mask_blend_ps(r.neg[a], lo, hi);
+                let far = _mm512_mask_blend_ps(r.neg[a], hi, lo);
+                // `vmaxps`/`vminps` return the second operand when either is NaN, as in
+                // the single-ray test: a NaN distance keeps the interval.
+                t_near = _mm512_max_ps(_mm512_fmadd_ps(near, scale[a], o_near[a]), t_near);
+                t_far = _mm512_min_ps(_mm512_fmadd_ps(far, scale[a], o_far[a]), t_far);
+            }
+            *m = _mm512_mask_cmp_ps_mask::<_CMP_LE_OQ>(lanes, t_near, t_far);
+        }
+        out
+    }
+
+    /// Primitive `prim` against the lanes `lanes` (all live).
+    #[inline(always)]
+    unsafe fn primitive<const ANY_HIT: bool>(
+        accel: &Accel,
+        shapes: &[Shape],
+        r: &PacketRay,
+        st: &mut State,
+        prim: usize,
+        lanes: u32,
+    ) {
+        if accel.analytic_lanes(prim) & 1 != 0 {
+            one_by_one::<ANY_HIT>(accel, shapes, r, st, prim, lanes);
+            return;
+        }
+        let p = accel.lanes.triangle(prim);
+        let h = triangle(r, &p, lanes as u16, _mm512_load_ps(st.t.as_ptr()));
+        if h.hit != 0 {
+            st.hit |= h.hit as u32;
+            if ANY_HIT {
+                st.live &= !(h.hit as u32);
+            } else {
+                _mm512_mask_store_ps(st.t.as_mut_ptr(), h.hit, h.t);
+                _mm512_mask_store_ps(st.b1.as_mut_ptr(), h.hit, h.b1);
+                _mm512_mask_store_ps(st.b2.as_mut_ptr(), h.hit, h.b2);
+                _mm512_mask_store_epi32(
+                    st.prim.as_mut_ptr() as *mut i32,
+                    h.hit,
+                    _mm512_set1_epi32(prim as i32),
+                );
+                _mm512_mask_store_epi32(
+                    st.inner.as_mut_ptr() as *mut i32,
+                    h.hit,
+                    _mm512_setzero_si512(),
+                );
+            }
+        }
+        if h.exact != 0 {
+            one_by_one::<ANY_HIT>(accel, shapes, r, st, prim, h.exact as u32);
+        }
+    }
+
+    /// Primitive `prim` by the scalar test, lane by lane.
+    #[inline(never)]
+    fn one_by_one<const ANY_HIT: bool>(
+        accel: &Accel,
+        shapes: &[Shape],
+        r: &PacketRay,
+        st: &mut State,
+        prim: usize,
+        mut lanes: u32,
+    ) {
+        while lanes != 0 {
+            let l = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            if let Some((t, bary, inner)) =
+                accel.intersect_prim(shapes, &r.wrays[l], &r.rays[l], prim, st.t[l], ANY_HIT)
+            {
+                st.record::<ANY_HIT>(l, prim as u32, t, bary, inner);
+            }
+        }
+    }
+
+    /// Lane `l` through the subtree of node `node` by the single-ray traversal, from its
+    /// closest hit so far.
+    #[inline(never)]
+    fn single<const ANY_HIT: bool>(
+        accel: &Accel,
+        shapes: &[Shape],
+        r: &PacketRay,
+        st: &mut State,
+        node: u32,
+        l: usize,
+    ) {
+        let (ray, wray) = (&r.rays[l], &r.wrays[l]);
+        let node_ray = wide::NodeRay::new(ray.o, ray.d);
+        let mut found = Found {
+            bary: Vec2::ZERO,
+            inner: 0,
+        };
+        let hit = accel.with_stack(|stack| {
+            wide::traverse_from(
+                &accel.bvh,
+                node,
+                &node_ray,
+                st.t[l],
+                ANY_HIT,
+                |base, mask, t_max| {
+                    accel
+                        .intersect_leaves(shapes, wray, ray, base, mask, t_max, ANY_HIT, &mut found)
+                },
+                stack,
+            )
+        });
+        if let Some((prim, t)) = hit {
+            st.record::<ANY_HIT>(l, prim, t, found.bary, found.inner);
+        }
+    }
+
+    /// Primitives `base + i` for the bits i of `mask` against lane `l` by its 8-wide test.
+    #[inline(never)]
+    fn lane_leaves<const ANY_HIT: bool>(
+        accel: &Accel,
+        shapes: &[Shape],
+        r: &PacketRay,
+        st: &mut State,
+        base: u32,
+        mask: u32,
+        l: usize,
+    ) {
+        let mut found = Found {
+            bary: Vec2::ZERO,
+            inner: 0,
+        };
+        if let Some((prim, t)) = accel.intersect_leaves(
+            shapes,
+            &r.wrays[l],
+            &r.rays[l],
+            base,
+            mask,
+            st.t[l],
+            ANY_HIT,
+            &mut found,
+        ) {
+            st.record::<ANY_HIT>(l, prim, t, found.bary, found.inner);
+        }
+    }
+
+    /// Stack entries: a node of the BVH8 pushes at most its 8 children, so a traversal of
+    /// depth < `wide::STACK_SIZE` holds fewer than 8 entries per level.
+    const STACK: usize = 8 * wide::STACK_SIZE;
+
+    /// # Safety
+    /// AVX-512F must be available; `accel` is flat or shallower than `wide::STACK_SIZE`.
+    pub(super) unsafe fn query<const ANY_HIT: bool>(
+        accel: &Accel,
+        shapes: &[Shape],
+        rays: &RayPacket,
+        st: &mut State,
+    ) {
+        let r = PacketRay::new(rays);
+        if accel.flat {
+            // A handful of primitives: every one against the packet, in order (as
+            // `Accel::intersect_flat`).
+            for prim in 0..accel.len() {
+                if st.live == 0 {
+                    return;
+                }
+                primitive::<ANY_HIT>(accel, shapes, &r, st, prim, st.live);
+            }
+            return;
+        }
+        // (node index, lanes) per entry.
+        let mut stack = [(0u32, 0u32); STACK];
+        stack[0] = (0, st.live);
+        let mut sp = 1usize;
+        let nodes = &accel.bvh.nodes;
+        while sp > 0 {
+            sp -= 1;
+            let (index, lanes) = stack[sp];
+            let lanes = lanes & st.live;
+            if lanes == 0 {
+                continue;
+            }
+            if lanes.count_ones() <= SINGLE_AT_MOST {
+                let mut rest = lanes;
+                while rest != 0 {
+                    let l = rest.trailing_zeros() as usize;
+                    rest &= rest - 1;
+                    single::<ANY_HIT>(accel, shapes, &r, st, index, l);
+                }
+                continue;
+            }
+            let node = &nodes[index as usize];
+            let hits = children(node, &r, lanes as u16, _mm512_load_ps(st.t.as_ptr()));
+
+            // Leaf children first (as the single-ray traversal): against the packet where
+            // enough lanes reached them, else each lane's primitives by its own test.
+            let mut lane_prims = [0u32; PACKET_LANES];
+            let mut few = 0u32;
+            for c in 0..8 {
+                let meta = node.child_meta[c] as u32;
+                let m = hits[c] as u32;
+                if m == 0 || node.imask & (1 << c) != 0 {
+                    continue;
+                }
+                let offset = meta & 0x1f;
+                let count = (meta >> 5).count_ones();
+                if m.count_ones() >= LEAF_PACKET_FROM {
+                    let base = (node.primitive_base_idx + offset) as usize;
+                    for i in 0..count as usize {
+                        let live = m & st.live;
+                        if live == 0 {
+                            break;
+                        }
+                        primitive::<ANY_HIT>(accel, shapes, &r, st, base + i, live);
+                    }
+                } else {
+                    few |= m;
+                    let bits = ((1u32 << count) - 1) << offset;
+                    let mut rest = m;
+                    while rest != 0 {
+                        let l = rest.trailing_zeros() as usize;
+                        rest &= rest - 1;
+                        lane_prims[l] |= bits;
+                    }
+                }
+            }
+            let mut rest = few & st.live;
+            while rest != 0 {
+                let l = rest.trailing_zeros() as usize;
+                rest &= rest - 1;
+                let base = node.primitive_base_idx;
+                lane_leaves::<ANY_HIT>(accel, shapes, &r, st, base, lane_prims[l], l);
+            }
+
+            // Inner children, nearest first for the first lane's octant: the CWBVH puts
+            // child slot c ^ octant nearer than the slots after it (Ylitie et al. 2017,
+            // `wide::traverse`'s order), so they are pushed farthest first.
+            let l = lanes.trailing_zeros();
+            let octant = (((r.neg[0] >> l) & 1) << 2
+                | ((r.neg[1] >> l) & 1) << 1
+                | ((r.neg[2] >> l) & 1)) as usize;
+            for i in (0..8).rev() {
+                let c = i ^ octant;
+                let m = hits[c] as u32 & st.live;
+                if m == 0 || node.imask & (1 << c) == 0 {
+                    continue;
+                }
+                let below = (node.imask as u32 & ((1u32 << c) - 1)).count_ones();
+                stack[sp] = (node.child_base_idx + below, m);
+                sp += 1;
+            }
+        }
+    }
+}

@@ -1,0 +1,581 @@
+//! Ray packets against single rays: `Accel::intersect_packet` must give, lane by lane, what
+//! `Accel::intersect` gives for the lane's ray (the same t, primitive, barycentrics bit for
+//! bit and the same inner primitive of an instance; where two primitives are hit at exactly
+//! the same distance the packet may report the other one, and then only t is compared), and
+//! both must agree with brute force; `Accel::occluded_packet` must give `Accel::occluded`
+//! lane by lane. Zero disagreements, on:
+//!
+//! * (a) the 10⁵-triangle sphere + soup mesh of `tests/bvh.rs` with incoherent packets;
+//! * (b) the same mesh with coherent, camera-like packets (4×4 pixel tiles);
+//! * (c) a scene of analytic spheres and disks beside triangles;
+//! * (d) a scene with shape-group instances (as `tests/instances.rs`);
+//! * (e) a flat scene (at most four primitives, tested without the BVH).
+//!
+//! Packets have random active masks (empty and full ones included) and a mix of finite and
+//! infinite t_max. `Scene::intersect_packet` must equal `Scene::intersect` per lane (point,
+//! normal, uv, shape, t), on scenes loaded from `scenes/`.
+
+use glam::{Affine3A, Quat, Vec2, Vec3};
+use radia_formats::load_mitsuba_xml;
+use radia_math::Ray;
+use radia_scene::shape::{Shape, ShapeKind};
+use radia_scene::{Accel, Geometry, Mesh, RayPacket, Scene, PACKET_LANES};
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg64;
+use rayon::prelude::*;
+
+fn uv_sphere(center: Vec3, radius: f32, rings: u32, segments: u32) -> Mesh {
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    for r in 0..=rings {
+        let theta = std::f32::consts::PI * r as f32 / rings as f32;
+        for s in 0..segments {
+            let phi = 2.0 * std::f32::consts::PI * s as f32 / segments as f32;
+            positions.push(
+                center
+                    + radius
+                        * Vec3::new(
+                            theta.sin() * phi.cos(),
+                            theta.sin() * phi.sin(),
+                            theta.cos(),
+                        ),
+            );
+        }
+    }
+    for r in 0..rings {
+        for s in 0..segments {
+            let a = r * segments + s;
+            let b = r * segments + (s + 1) % segments;
+            let c = a + segments;
+            let d = b + segments;
+            indices.push([a, c, b]);
+            indices.push([b, c, d]);
+        }
+    }
+    Mesh {
+        positions,
+        indices,
+        ..Default::default()
+    }
+}
+
+fn soup(rng: &mut Pcg64, n: usize, half: f32, size: f32) -> Mesh {
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    for i in 0..n {
+        let c = random_in_cube(rng, half);
+        for _ in 0..3 {
+            positions.push(c + random_in_cube(rng, size));
+        }
+        let k = 3 * i as u32;
+        indices.push([k, k + 1, k + 2]);
+    }
+    Mesh {
+        positions,
+        indices,
+        ..Default::default()
+    }
+}
+
+/// A uniformly random point in the cube [−half, half]³.
+fn random_in_cube(rng: &mut Pcg64, half: f32) -> Vec3 {
+    Vec3::new(
+        rng.random_range(-half..half),
+        rng.random_range(-half..half),
+        rng.random_range(-half..half),
+    )
+}
+
+fn random_dir(rng: &mut Pcg64) -> Vec3 {
+    radia_sampling::warp::square_to_uniform_sphere(Vec2::new(rng.random(), rng.random()))
+}
+
+/// The mesh of `tests/bvh.rs`: a closed 200×200 sphere, a soup of 30 000 small triangles and
+/// an analytic sphere (over 10⁵ primitives).
+fn sphere_and_soup() -> Vec<Shape> {
+    let mut rng = Pcg64::seed_from_u64(42);
+    vec![
+        Shape::new(
+            Geometry::Mesh(uv_sphere(Vec3::new(0.3, -0.2, 0.1), 2.0, 200, 200)),
+            0,
+            None,
+        ),
+        Shape::new(Geometry::Mesh(soup(&mut rng, 30_000, 3.0, 0.1)), 0, None),
+        Shape::new(
+            Geometry::sphere(Vec3::new(2.5, 2.5, 2.5), 0.7, false),
+            0,
+            None,
+        ),
+    ]
+}
+
+/// A random active mask: sometimes all lanes, sometimes none or one, mostly random.
+fn random_mask(rng: &mut Pcg64) -> u32 {
+    match rng.random_range(0..8) {
+        0 => 0xffff,
+        1 => 0,
+        2 => 1 << rng.random_range(0..PACKET_LANES),
+        _ => rng.random::<u32>() & 0xffff,
+    }
+}
+
+/// A packet of `rays` (one per lane), only the lanes of `active` active; the inactive lanes
+/// hold rays too (which must be ignored).
+fn packet(rays: &[Ray; PACKET_LANES], active: u32) -> RayPacket {
+    let mut p = RayPacket::new();
+    for (l, r) in rays.iter().enumerate() {
+        p.set(l, r);
+    }
+    p.active = active;
+    p
+}
+
+/// Packets of the incoherent rays of `tests/bvh.rs`: half from inside the closed sphere,
+/// half from outside, a third with a finite t_max.
+fn incoherent_packets(rng: &mut Pcg64, count: usize) -> Vec<RayPacket> {
+    (0..count)
+        .map(|_| {
+            let rays: [Ray; PACKET_LANES] = std::array::from_fn(|i| {
+                let o = if rng.random::<bool>() {
+                    random_in_cube(rng, 1.0)
+                } else {
+                    random_dir(rng) * rng.random_range(4.0..8.0)
+                };
+                let t_max = if i % 3 == 0 {
+                    rng.random_range(0.5..6.0)
+                } else {
+                    f32::INFINITY
+                };
+                Ray::new(o, random_dir(rng), t_max)
+            });
+            packet(&rays, random_mask(rng))
+        })
+        .collect()
+}
+
+/// Coherent packets: 4×4 pixel tiles of a pinhole camera at `eye` looking at `target`
+/// (one jittered ray per pixel, 1/256 of the image per pixel), a quarter with a finite t_max
+/// for the whole tile (as shadow-like segments from one point).
+fn camera_packets(rng: &mut Pcg64, eye: Vec3, target: Vec3, count: usize) -> Vec<RayPacket> {
+    let forward = (target - eye).normalize();
+    let right = forward.cross(Vec3::Y).normalize();
+    let up = right.cross(forward);
+    (0..count)
+        .map(|i| {
+            let tile = Vec2::new(rng.random_range(0.0..64.0), rng.random_range(0.0..64.0));
+            let t_max = if i % 4 == 0 {
+                rng.random_range(1.0..8.0)
+            } else {
+                f32::INFINITY
+            };
+            let rays: [Ray; PACKET_LANES] = std::array::from_fn(|l| {
+                let px = tile.floor() * 4.0
+                    + Vec2::new((l % 4) as f32, (l / 4) as f32)
+                    + Vec2::new(rng.random(), rng.random());
+                let s = px / 256.0 * 2.0 - Vec2::ONE;
+                let d = (forward + right * s.x * 0.6 + up * s.y * 0.6).normalize();
+                Ray::new(eye, d, t_max)
+            });
+            let active = if i % 3 == 0 { 0xffff } else { random_mask(rng) };
+            packet(&rays, active)
+        })
+        .collect()
+}
+
+/// Counts of what was compared.
+#[derive(Default, Debug)]
+struct Tally {
+    lanes: usize,
+    hits: usize,
+    ties: usize,
+    occluded: usize,
+}
+
+/// Checks every packet lane by lane against the single-ray queries (and brute force when
+/// `brute`); returns the tally, panics with the first disagreements.
+fn check(accel: &Accel, shapes: &[Shape], packets: &[RayPacket], brute: bool) -> Tally {
+    let bounds = accel.primitive_bounds(shapes);
+    let results: Vec<(Tally, Vec<String>)> = packets
+        .par_iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let mut tally = Tally::default();
+            let mut failures = Vec::new();
+            let hits = accel.intersect_packet(shapes, p);
+            let occluded = accel.occluded_packet(shapes, p);
+            if hits.hit & !p.active != 0 || occluded & !p.active != 0 {
+                failures.push(format!("packet {k}: an inactive lane reports a hit"));
+            }
+            for l in 0..PACKET_LANES {
+                if p.active & (1 << l) == 0 {
+                    continue;
+                }
+                tally.lanes += 1;
+                let ray = p.ray(l);
+                let single = accel.intersect(shapes, &ray);
+                let got = hits.hit(l);
+                let same = match (got, single) {
+                    (None, None) => true,
+                    (Some(a), Some(b)) if a.prim == b.prim => {
+                        a.t.to_bits() == b.t.to_bits()
+                            && a.bary.x.to_bits() == b.bary.x.to_bits()
+                            && a.bary.y.to_bits() == b.bary.y.to_bits()
+                            && a.inner == b.inner
+                    }
+                    (Some(a), Some(b)) => {
+                        tally.ties += 1;
+                        a.t.to_bits() == b.t.to_bits()
+                    }
+                    _ => false,
+                };
+                tally.hits += got.is_some() as usize;
+                if !same {
+                    failures.push(format!(
+                        "packet {k} lane {l} {ray:?}: packet {got:?}, single {single:?}"
+                    ));
+                }
+                if brute {
+                    let b = accel.intersect_brute_force(shapes, &bounds, &ray);
+                    if b.map(|h| h.t.to_bits()) != single.map(|h| h.t.to_bits()) {
+                        failures.push(format!(
+                            "packet {k} lane {l}: brute {b:?}, single {single:?}"
+                        ));
+                    }
+                }
+                let occ = occluded & (1 << l) != 0;
+                tally.occluded += occ as usize;
+                if occ != accel.occluded(shapes, &ray) {
+                    failures.push(format!("packet {k} lane {l}: occluded {occ}"));
+                }
+            }
+            (tally, failures)
+        })
+        .collect();
+    let mut tally = Tally::default();
+    let mut failures = Vec::new();
+    for (t, f) in results {
+        tally.lanes += t.lanes;
+        tally.hits += t.hits;
+        tally.ties += t.ties;
+        tally.occluded += t.occluded;
+        failures.extend(f);
+    }
+    assert!(
+        failures.is_empty(),
+        "{} disagreements ({tally:?}): {:#?}",
+        failures.len(),
+        &failures[..failures.len().min(10)]
+    );
+    tally
+}
+
+/// (a) Incoherent packets over the 10⁵-triangle mesh: over 10⁵ active lanes.
+#[test]
+fn incoherent_packets_match_single_rays_and_brute_force() {
+    let shapes = sphere_and_soup();
+    let accel = Accel::build(&shapes);
+    assert!(accel.len() >= 100_000);
+    let mut rng = Pcg64::seed_from_u64(1);
+    let packets = incoherent_packets(&mut rng, 16_000);
+    let tally = check(&accel, &shapes, &packets, true);
+    assert!(
+        tally.lanes >= 100_000 && tally.hits > 50_000 && tally.occluded > 50_000,
+        "{tally:?}"
+    );
+}
+
+/// (b) Coherent packets (camera tiles) over the same mesh, from outside and from inside the
+/// closed sphere.
+#[test]
+fn coherent_packets_match_single_rays_and_brute_force() {
+    let shapes = sphere_and_soup();
+    let accel = Accel::build(&shapes);
+    let mut rng = Pcg64::seed_from_u64(2);
+    let mut packets = camera_packets(&mut rng, Vec3::new(0.5, 1.0, 7.0), Vec3::ZERO, 3000);
+    packets.extend(camera_packets(
+        &mut rng,
+        Vec3::new(0.2, 0.1, -0.3),
+        Vec3::new(1.0, -0.5, 0.0),
+        3000,
+    ));
+    let tally = check(&accel, &shapes, &packets, true);
+    assert!(tally.lanes > 50_000 && tally.hits > 40_000, "{tally:?}");
+}
+
+/// (c) Spheres and disks (analytic, tested lane by lane) among triangles.
+#[test]
+fn analytic_shapes_in_packets_match_single_rays() {
+    let mut rng = Pcg64::seed_from_u64(3);
+    let mut shapes = vec![Shape::new(
+        Geometry::Mesh(soup(&mut rng, 3000, 3.0, 0.3)),
+        0,
+        None,
+    )];
+    for i in 0..40 {
+        let c = random_in_cube(&mut rng, 3.0);
+        shapes.push(Shape::new(
+            if i % 2 == 0 {
+                Geometry::sphere(c, rng.random_range(0.1..0.6), i % 4 == 0)
+            } else {
+                Geometry::Disk {
+                    to_world: Affine3A::from_scale_rotation_translation(
+                        Vec3::splat(rng.random_range(0.2..0.8)),
+                        Quat::from_axis_angle(random_dir(&mut rng), rng.random_range(0.0..3.0)),
+                        c,
+                    ),
+                    flip_normals: false,
+                }
+            },
+            0,
+            None,
+        ));
+    }
+    let accel = Accel::build(&shapes);
+    let mut packets = incoherent_packets(&mut rng, 3000);
+    packets.extend(camera_packets(
+        &mut rng,
+        Vec3::new(0.0, 0.5, 6.0),
+        Vec3::ZERO,
+        2000,
+    ));
+    let tally = check(&accel, &shapes, &packets, true);
+    assert!(tally.hits > 20_000, "{tally:?}");
+}
+
+/// (d) Instances of shape groups (rotated, scaled, mirrored) beside ordinary shapes.
+#[test]
+fn instances_in_packets_match_single_rays() {
+    let mut rng = Pcg64::seed_from_u64(4);
+    let sphere = |center: Vec3, radius: f32| Geometry::sphere(center, radius, false);
+    let placements = [
+        (Vec3::ONE, Quat::IDENTITY, Vec3::new(-3.0, 0.0, 0.0), 0),
+        (
+            Vec3::new(1.7, 0.4, 1.0),
+            Quat::from_rotation_y(0.7),
+            Vec3::new(2.0, 1.0, -1.0),
+            0,
+        ),
+        (
+            Vec3::new(-1.0, 1.0, 1.0), // mirrored
+            Quat::from_axis_angle(Vec3::new(1.0, 2.0, 3.0).normalize(), 1.1),
+            Vec3::new(0.0, -2.5, 1.0),
+            0,
+        ),
+        (Vec3::ONE, Quat::IDENTITY, Vec3::new(0.0, 2.5, 0.0), 1),
+        (
+            Vec3::splat(0.9),
+            Quat::from_rotation_y(-0.3),
+            Vec3::new(-2.6, 0.3, 0.2),
+            0,
+        ),
+    ];
+    let mut shapes = Vec::new();
+    for (scale, rotation, translation, group) in placements {
+        shapes.push(Shape::new(
+            Geometry::Instance {
+                group,
+                to_world: Affine3A::from_scale_rotation_translation(scale, rotation, translation),
+            },
+            0,
+            None,
+        ));
+    }
+    shapes.push(Shape::new(
+        Geometry::Mesh(soup(&mut rng, 300, 3.0, 0.15)),
+        0,
+        None,
+    ));
+    shapes.push(Shape::new(sphere(Vec3::new(3.0, -2.0, 2.0), 0.5), 0, None));
+    let members = [
+        (0, Geometry::Mesh(uv_sphere(Vec3::ZERO, 1.0, 40, 40))),
+        (0, Geometry::Mesh(soup(&mut rng, 2000, 1.2, 0.15))),
+        (0, sphere(Vec3::new(0.8, 0.8, 0.0), 0.4)),
+        (
+            1,
+            Geometry::Disk {
+                to_world: Affine3A::from_rotation_x(0.5),
+                flip_normals: false,
+            },
+        ),
+        (1, Geometry::Mesh(soup(&mut rng, 500, 0.8, 0.15))),
+    ];
+    for (group, geometry) in members {
+        let mut s = Shape::new(geometry, 0, None);
+        s.group = Some(group);
+        shapes.push(s);
+    }
+    // What Scene::build does: the instances' bounds from their groups'.
+    let mut group_bounds = [[Vec3::INFINITY, Vec3::NEG_INFINITY]; 2];
+    let accel = Accel::build(&shapes);
+    for (g, b) in group_bounds.iter_mut().enumerate() {
+        let group = accel.group(g as u32);
+        for [lo, hi] in group.primitive_bounds(&shapes) {
+            *b = [b[0].min(lo), b[1].max(hi)];
+        }
+    }
+    for s in &mut shapes {
+        if let ShapeKind::Instance(i) = &mut s.kind {
+            i.bounds = i.world_bounds(group_bounds[i.group as usize]);
+        }
+    }
+    let accel = Accel::build(&shapes);
+    let mut packets = incoherent_packets(&mut rng, 2000);
+    packets.extend(camera_packets(
+        &mut rng,
+        Vec3::new(0.0, 1.0, 7.0),
+        Vec3::ZERO,
+        2000,
+    ));
+    let tally = check(&accel, &shapes, &packets, true);
+    assert!(tally.hits > 6_000, "{tally:?}");
+}
+
+/// (e) A flat scene: two triangles, a sphere and a disk (every query tests all four).
+#[test]
+fn flat_scene_packets_match_single_rays() {
+    let mut rng = Pcg64::seed_from_u64(5);
+    let quad = Mesh {
+        positions: vec![
+            Vec3::new(-2.0, -1.0, -2.0),
+            Vec3::new(2.0, -1.0, -2.0),
+            Vec3::new(2.0, -1.0, 2.0),
+            Vec3::new(-2.0, -1.0, 2.0),
+        ],
+        indices: vec![[0, 1, 2], [0, 2, 3]],
+        ..Default::default()
+    };
+    let shapes = vec![
+        Shape::new(Geometry::Mesh(quad), 0, None),
+        Shape::new(
+            Geometry::sphere(Vec3::new(0.3, 0.0, 0.0), 0.8, false),
+            0,
+            None,
+        ),
+        Shape::new(
+            Geometry::Disk {
+                to_world: Affine3A::from_scale_rotation_translation(
+                    Vec3::splat(0.7),
+                    Quat::from_rotation_x(0.4),
+                    Vec3::new(-1.0, 0.5, 0.5),
+                ),
+                flip_normals: false,
+            },
+            0,
+            None,
+        ),
+    ];
+    let accel = Accel::build(&shapes);
+    assert_eq!(accel.len(), 4);
+    let mut packets = incoherent_packets(&mut rng, 3000);
+    packets.extend(camera_packets(
+        &mut rng,
+        Vec3::new(0.0, 1.0, 5.0),
+        Vec3::ZERO,
+        3000,
+    ));
+    // Rays aimed at the quad's shared diagonal (edge functions exactly zero in places).
+    packets.extend((0..2000).map(|_| {
+        let rays: [Ray; PACKET_LANES] = std::array::from_fn(|_| {
+            let s = rng.random_range(-1.0..1.0f32);
+            let target = Vec3::new(2.0 * s, -1.0, 2.0 * s);
+            let o = target + random_dir(&mut rng) * 3.0;
+            Ray::new(o, (target - o).normalize(), f32::INFINITY)
+        });
+        packet(&rays, 0xffff)
+    }));
+    let tally = check(&accel, &shapes, &packets, true);
+    assert!(tally.hits > 20_000, "{tally:?}");
+}
+
+fn load(name: &str) -> Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes")
+        .join(name);
+    Scene::build(load_mitsuba_xml(&path, &[]).unwrap_or_else(|e| panic!("{e}")))
+}
+
+/// `Scene::intersect_packet` per lane is `Scene::intersect` (point, normal, uv, shape,
+/// instance and t bit for bit), on the Cornell box (a BVH of triangles), `envmap.xml` (three
+/// spheres and a disk: flat) and `instances.xml` (shape groups), for camera tiles and for
+/// bounce rays from their hits.
+#[test]
+fn scene_packets_match_scene_intersect() {
+    for name in ["cornell-box.xml", "envmap.xml", "instances.xml"] {
+        let scene = load(name);
+        let mut rng = Pcg64::seed_from_u64(6);
+        let (mut compared, mut hits, mut failures) = (0, 0, Vec::new());
+        for k in 0..4000 {
+            let tile = Vec2::new(
+                rng.random_range(0..32) as f32,
+                rng.random_range(0..32) as f32,
+            );
+            let rays: [Ray; PACKET_LANES] = std::array::from_fn(|l| {
+                let px = tile * 4.0
+                    + Vec2::new((l % 4) as f32, (l / 4) as f32)
+                    + Vec2::new(rng.random(), rng.random());
+                let camera = scene.camera.generate_ray(px / 128.0);
+                if k % 2 == 0 {
+                    return camera;
+                }
+                // A bounce: from the camera ray's hit, anywhere.
+                match scene.intersect(&camera) {
+                    Some(si) => si.spawn_ray(random_dir(&mut rng)),
+                    None => camera,
+                }
+            });
+            let active = random_mask(&mut rng) | 1;
+            let p = packet(&rays, active);
+            let mut out = [None; PACKET_LANES];
+            scene.intersect_packet(&p, &mut out);
+            let occluded = scene.occluded_packet(&p);
+            for (l, got) in out.iter().enumerate() {
+                if active & (1 << l) == 0 {
+                    if got.is_some() || occluded & (1 << l) != 0 {
+                        failures.push(format!("{name} packet {k}: inactive lane {l} hit"));
+                    }
+                    continue;
+                }
+                compared += 1;
+                let want = scene.intersect(&rays[l]);
+                let key = |si: &radia_scene::SurfaceInteraction| {
+                    (
+                        si.t.to_bits(),
+                        si.p.to_array().map(f32::to_bits),
+                        si.n.to_array().map(f32::to_bits),
+                        si.uv.to_array().map(f32::to_bits),
+                        si.shape,
+                        si.instance,
+                    )
+                };
+                let same = match (got, &want) {
+                    (None, None) => true,
+                    (Some(a), Some(b)) => {
+                        key(a) == key(b)
+                            || (a.t.to_bits() == b.t.to_bits()
+                                && (a.shape, a.face) != (b.shape, b.face))
+                    }
+                    _ => false,
+                };
+                hits += got.is_some() as usize;
+                if !same {
+                    failures.push(format!(
+                        "{name} packet {k} lane {l}: packet {got:?}, single {want:?}"
+                    ));
+                }
+                if (occluded & (1 << l) != 0) != scene.occluded(&rays[l]) {
+                    failures.push(format!("{name} packet {k} lane {l}: occlusion differs"));
+                }
+            }
+        }
+        assert!(
+            failures.is_empty(),
+            "{} disagreements: {:#?}",
+            failures.len(),
+            &failures[..failures.len().min(10)]
+        );
+        assert!(
+            compared > 30_000 && hits > 5_000,
+            "{name}: {compared} lanes, {hits} hits"
+        );
+    }
+}
