@@ -12,7 +12,9 @@
 //! and Mark 2012 ("Combining Single and Packet-Ray Tracing for Arbitrary Ray Distributions
 //! on the Intel MIC Architecture"), a subtree reached by few lanes is finished by the
 //! single-ray traversal of each of them ([`SINGLE_AT_MOST`]), and a leaf reached by few lanes
-//! is tested by each lane's 8-wide triangle test ([`LEAF_PACKET_FROM`]).
+//! is tested by each lane's 8-wide triangle test ([`LEAF_PACKET_FROM`]). Closest-hit packets
+//! over deep trees are split by ray octant first ([`ORDERED_ABOVE_DEPTH`]), so that each lane
+//! meets children nearest first, as packets of one octant do in Wald et al. 2001.
 //!
 //! Answers are those of [`Accel::intersect`] and [`Accel::occluded`] lane by lane: every
 //! primitive test computes the single-ray test's bits, and a lane visits every node whose
@@ -163,13 +165,44 @@ impl State {
     }
 }
 
+// How the rules below were chosen (`cargo bench -p radia-scene --bench bvh`, one core of
+// an AVX-512 machine shared with another build, so ±10 % noise; packet time / time of the
+// same rays one at a time, `Accel` queries):
+//
+// * One 16-lane node test costs about four single-ray (8-wide AVX2) node tests, and one
+//   triangle broadcast against 16 lanes about one single-ray test of a leaf's triangles, so
+//   a node or leaf pays off from about four lanes on: [`SINGLE_AT_MOST`] = 3 and
+//   [`LEAF_PACKET_FROM`] = 4. With 6 instead of 3, million/camera went from 0.53 to 0.58 and
+//   nothing improved beyond the noise.
+// * Children in the order of each node's first lane: camera tiles 0.46 (Cornell box) and
+//   0.53 (10⁶ triangles), occlusion 0.55–0.90 on every set of both scenes, Cornell bounce
+//   0.87; but 10⁶-triangle bounce rays (a tile's rays leave one point in all directions of
+//   a hemisphere) 1.21–1.29: lanes whose octant differs from the first lane's explore far
+//   subtrees before near ones, and without their near hit's t_max they cull little.
+// * One packet per octant (rays of one octant share the near-to-far order of the CWBVH's
+//   child slots): 10⁶-triangle bounce 1.06, camera unchanged (a tile's rays share an
+//   octant), but the Cornell box's bounce 1.26 and shadow segments 1.26 on both scenes
+//   (groups of three lanes or fewer then go one by one, with the packet's set-up on top).
+// * A lane leaving the packet when its subtree is sparse, to be traced again from the root
+//   with its t_max so far (closest hit): 10⁶-triangle bounce 1.09, but camera 0.88 instead
+//   of 0.53 (lanes lose the packet for good at the first sparse subtree).
+//
+// Hence: occlusion (any hit, where the order matters little) and shallow trees take the
+// first lane's order; closest-hit queries in trees deeper than [`ORDERED_ABOVE_DEPTH`] one
+// packet per octant.
+
 /// Subtrees reached by at most this many lanes are finished by each lane's single-ray
-/// traversal. Measured (`benches/bvh.rs`, see [`Accel::intersect_packet`]).
+/// traversal (Benthin et al. 2012's hybrid); see the measurements above.
 const SINGLE_AT_MOST: u32 = 3;
 
 /// Leaves reached by at least this many lanes have their triangles tested against the packet;
-/// fewer lanes test them with their own 8-wide test. Measured as [`SINGLE_AT_MOST`].
+/// fewer lanes test them with their own 8-wide test.
 const LEAF_PACKET_FROM: u32 = 4;
+
+/// Closest-hit packets over BVHs of more levels than this are split by octant (a BVH8 of
+/// three levels holds up to about 1500 primitives, the Cornell box's two levels 32): in a
+/// shallow tree the order of children hardly matters, and the split costs more than it saves.
+const ORDERED_ABOVE_DEPTH: usize = 3;
 
 impl Accel {
     /// Per lane the closest hit, as [`Accel::intersect`] gives it for that lane's ray (when
@@ -579,9 +612,48 @@ mod avx512 {
             }
             return;
         }
+        if !ANY_HIT && accel.depth > ORDERED_ABOVE_DEPTH {
+            // One packet per octant: every lane then visits children nearest first for its
+            // own direction, as its single-ray traversal does.
+            for octant in 0..8u32 {
+                let pick = |a: usize, bit: u32| {
+                    if octant & bit != 0 {
+                        r.neg[a] as u32
+                    } else {
+                        !r.neg[a] as u32 & 0xffff
+                    }
+                };
+                let lanes = st.live & pick(0, 4) & pick(1, 2) & pick(2, 1);
+                if lanes.count_ones() > SINGLE_AT_MOST {
+                    traverse::<ANY_HIT>(accel, shapes, &r, st, lanes, Some(octant as usize));
+                } else {
+                    let mut rest = lanes;
+                    while rest != 0 {
+                        let l = rest.trailing_zeros() as usize;
+                        rest &= rest - 1;
+                        single::<ANY_HIT>(accel, shapes, &r, st, 0, l);
+                    }
+                }
+            }
+        } else {
+            traverse::<ANY_HIT>(accel, shapes, &r, st, st.live, None);
+        }
+    }
+
+    /// The packet traversal for the lanes `lanes` from the root; children ordered for
+    /// `octant` (None: each node's first lane's).
+    #[inline(always)]
+    unsafe fn traverse<const ANY_HIT: bool>(
+        accel: &Accel,
+        shapes: &[Shape],
+        r: &PacketRay,
+        st: &mut State,
+        lanes: u32,
+        fixed_octant: Option<usize>,
+    ) {
         // (node index, lanes) per entry.
         let mut stack = [(0u32, 0u32); STACK];
-        stack[0] = (0, st.live);
+        stack[0] = (0, lanes);
         let mut sp = 1usize;
         let nodes = &accel.bvh.nodes;
         while sp > 0 {
@@ -596,20 +668,20 @@ mod avx512 {
                 while rest != 0 {
                     let l = rest.trailing_zeros() as usize;
                     rest &= rest - 1;
-                    single::<ANY_HIT>(accel, shapes, &r, st, index, l);
+                    single::<ANY_HIT>(accel, shapes, r, st, index, l);
                 }
                 continue;
             }
             let node = &nodes[index as usize];
-            let hits = children(node, &r, lanes as u16, _mm512_load_ps(st.t.as_ptr()));
+            let hits = children(node, r, lanes as u16, _mm512_load_ps(st.t.as_ptr()));
 
             // Leaf children first (as the single-ray traversal): against the packet where
             // enough lanes reached them, else each lane's primitives by its own test.
             let mut lane_prims = [0u32; PACKET_LANES];
             let mut few = 0u32;
-            for c in 0..8 {
+            for (c, &m) in hits.iter().enumerate() {
                 let meta = node.child_meta[c] as u32;
-                let m = hits[c] as u32;
+                let m = m as u32;
                 if m == 0 || node.imask & (1 << c) != 0 {
                     continue;
                 }
@@ -622,7 +694,7 @@ mod avx512 {
                         if live == 0 {
                             break;
                         }
-                        primitive::<ANY_HIT>(accel, shapes, &r, st, base + i, live);
+                        primitive::<ANY_HIT>(accel, shapes, r, st, base + i, live);
                     }
                 } else {
                     few |= m;
@@ -640,16 +712,17 @@ mod avx512 {
                 let l = rest.trailing_zeros() as usize;
                 rest &= rest - 1;
                 let base = node.primitive_base_idx;
-                lane_leaves::<ANY_HIT>(accel, shapes, &r, st, base, lane_prims[l], l);
+                lane_leaves::<ANY_HIT>(accel, shapes, r, st, base, lane_prims[l], l);
             }
 
             // Inner children, nearest first for the first lane's octant: the CWBVH puts
             // child slot c ^ octant nearer than the slots after it (Ylitie et al. 2017,
             // `wide::traverse`'s order), so they are pushed farthest first.
             let l = lanes.trailing_zeros();
-            let octant = (((r.neg[0] >> l) & 1) << 2
-                | ((r.neg[1] >> l) & 1) << 1
-                | ((r.neg[2] >> l) & 1)) as usize;
+            let octant = fixed_octant.unwrap_or(
+                (((r.neg[0] >> l) & 1) << 2 | ((r.neg[1] >> l) & 1) << 1 | ((r.neg[2] >> l) & 1))
+                    as usize,
+            );
             for i in (0..8).rev() {
                 let c = i ^ octant;
                 let m = hits[c] as u32 & st.live;
