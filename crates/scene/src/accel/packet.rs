@@ -273,7 +273,7 @@ mod avx512 {
 
     /// Per-packet constants of the node and triangle tests, lane by lane what `NodeRay` and
     /// `WatertightRay` hold for one ray.
-    struct PacketRay {
+    struct PacketRay<'a> {
         o: [__m512; 3],
         /// 1 / d (±∞ for a zero component), and its magnitude.
         inv: [__m512; 3],
@@ -285,51 +285,64 @@ mod avx512 {
         s: [__m512; 3],
         /// `ksel[j][a]`: lanes whose k_j is axis a (a = 0, 1; the rest have axis 2).
         ksel: [[__mmask16; 2]; 3],
-        rays: [Ray; PACKET_LANES],
-        wrays: [WatertightRay; PACKET_LANES],
+        /// The rays, for the tests done one lane at a time.
+        packet: &'a RayPacket,
     }
 
-    impl PacketRay {
+    /// Per lane, `x` where `m[0]` is set, else `y` where `m[1]` is set, else `z`.
+    #[inline(always)]
+    unsafe fn select3(m: [__mmask16; 2], [x, y, z]: [__m512; 3]) -> __m512 {
+        _mm512_mask_blend_ps(m[0], _mm512_mask_blend_ps(m[1], z, y), x)
+    }
+
+    impl<'a> PacketRay<'a> {
         #[inline(always)]
-        unsafe fn new(p: &RayPacket) -> Self {
-            let rays: [Ray; PACKET_LANES] = std::array::from_fn(|l| p.ray(l));
-            let wrays: [WatertightRay; PACKET_LANES] =
-                std::array::from_fn(|l| WatertightRay::new(&rays[l]));
+        unsafe fn new(p: &'a RayPacket) -> Self {
             let load = |v: &[f32; PACKET_LANES]| _mm512_loadu_ps(v.as_ptr());
             let o = [load(&p.o[0]), load(&p.o[1]), load(&p.o[2])];
+            let d = [load(&p.d[0]), load(&p.d[1]), load(&p.d[2])];
             let one = _mm512_set1_ps(1.0);
             // `NodeRay::new`: Vec3A::ONE / d, per component.
-            let inv = [
-                _mm512_div_ps(one, load(&p.d[0])),
-                _mm512_div_ps(one, load(&p.d[1])),
-                _mm512_div_ps(one, load(&p.d[2])),
-            ];
+            let inv = d.map(|v| _mm512_div_ps(one, v));
             let inv_abs = inv.map(|v| _mm512_abs_ps(v));
             let zero = _mm512_setzero_ps();
             let neg = inv.map(|v| _mm512_cmp_ps_mask::<_CMP_LT_OQ>(v, zero));
-            let mut ok = [[0.0f32; PACKET_LANES]; 3];
-            let mut s = [[0.0f32; PACKET_LANES]; 3];
-            let mut ksel = [[0u16; 2]; 3];
-            for (l, w) in wrays.iter().enumerate() {
-                for j in 0..3 {
-                    ok[j][l] = w.o[w.k[j]];
-                    s[j][l] = w.s[j];
-                    if w.k[j] < 2 {
-                        ksel[j][w.k[j]] |= 1 << l;
-                    }
-                }
-            }
+
+            // `WatertightRay::new` in lanes (the same comparisons, division and products):
+            // k_z the dominant axis of |d|, k_x and k_y the next ones, swapped when d[k_z] < 0.
+            let a = d.map(|v| _mm512_abs_ps(v));
+            let gt = |x, y| _mm512_cmp_ps_mask::<_CMP_GT_OQ>(x, y);
+            let x_over_y = gt(a[0], a[1]);
+            let kz0 = x_over_y & gt(a[0], a[2]);
+            let kz1 = !x_over_y & gt(a[1], a[2]);
+            let kz2 = !(kz0 | kz1);
+            let dz = select3([kz0, kz1], d);
+            let swap = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(dz, zero);
+            // Unswapped, k_z = 0, 1, 2 gives k_x = 1, 2, 0 and k_y = 2, 0, 1.
+            let kx = [(kz2 & !swap) | (kz1 & swap), (kz0 & !swap) | (kz2 & swap)];
+            let ky = [(kz1 & !swap) | (kz2 & swap), (kz2 & !swap) | (kz0 & swap)];
+            let kz = [kz0, kz1];
+            let sz = _mm512_div_ps(one, dz);
             Self {
                 o,
                 inv,
                 inv_abs,
                 neg,
-                ok: ok.map(|v| load(&v)),
-                s: s.map(|v| load(&v)),
-                ksel,
-                rays,
-                wrays,
+                ok: [select3(kx, o), select3(ky, o), select3(kz, o)],
+                s: [
+                    _mm512_mul_ps(select3(kx, d), sz),
+                    _mm512_mul_ps(select3(ky, d), sz),
+                    sz,
+                ],
+                ksel: [kx, ky, kz],
+                packet: p,
             }
+        }
+
+        /// Lane `l`'s ray.
+        #[inline(always)]
+        fn ray(&self, l: usize) -> Ray {
+            self.packet.ray(l)
         }
 
         /// Coordinate k_j of `p` per lane.
@@ -515,9 +528,15 @@ mod avx512 {
         while lanes != 0 {
             let l = lanes.trailing_zeros() as usize;
             lanes &= lanes - 1;
-            if let Some((t, bary, inner)) =
-                accel.intersect_prim(shapes, &r.wrays[l], &r.rays[l], prim, st.t[l], ANY_HIT)
-            {
+            let ray = r.ray(l);
+            if let Some((t, bary, inner)) = accel.intersect_prim(
+                shapes,
+                &WatertightRay::new(&ray),
+                &ray,
+                prim,
+                st.t[l],
+                ANY_HIT,
+            ) {
                 st.record::<ANY_HIT>(l, prim as u32, t, bary, inner);
             }
         }
@@ -534,7 +553,8 @@ mod avx512 {
         node: u32,
         l: usize,
     ) {
-        let (ray, wray) = (&r.rays[l], &r.wrays[l]);
+        let ray = &r.ray(l);
+        let wray = &WatertightRay::new(ray);
         let node_ray = wide::NodeRay::new(ray.o, ray.d);
         let mut found = Found {
             bary: Vec2::ZERO,
@@ -570,14 +590,15 @@ mod avx512 {
         mask: u32,
         l: usize,
     ) {
+        let ray = r.ray(l);
         let mut found = Found {
             bary: Vec2::ZERO,
             inner: 0,
         };
         if let Some((prim, t)) = accel.intersect_leaves(
             shapes,
-            &r.wrays[l],
-            &r.rays[l],
+            &WatertightRay::new(&ray),
+            &ray,
             base,
             mask,
             st.t[l],
