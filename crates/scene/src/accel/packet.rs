@@ -183,6 +183,11 @@ impl State {
 //   child slots): 10⁶-triangle bounce 1.06, camera unchanged (a tile's rays share an
 //   octant), but the Cornell box's bounce 1.26 and shadow segments 1.26 on both scenes
 //   (groups of three lanes or fewer then go one by one, with the packet's set-up on top).
+// * After the watertight set-up was moved into lanes (it had cost about as much as a
+//   Cornell-box query per lane): Cornell camera 0.21, bounce 0.55, occlusion 0.25–0.60.
+//   Octant groups of fewer than [`OCTANT_PACKET_FROM`] = 8 lanes traced one by one:
+//   10⁶-triangle bounce 62.7–65.5 ms against 65.5–68.5 ms with groups from 4 lanes and 67.5
+//   ms with every lane alone, single rays 63–79 ms over the same runs (noise).
 // * A lane leaving the packet when its subtree is sparse, to be traced again from the root
 //   with its t_max so far (closest hit): 10⁶-triangle bounce 1.09, but camera 0.88 instead
 //   of 0.53 (lanes lose the packet for good at the first sparse subtree).
@@ -198,6 +203,9 @@ const SINGLE_AT_MOST: u32 = 3;
 /// Leaves reached by at least this many lanes have their triangles tested against the packet;
 /// fewer lanes test them with their own 8-wide test.
 const LEAF_PACKET_FROM: u32 = 4;
+
+/// Octant groups (see [`ORDERED_ABOVE_DEPTH`]) of fewer lanes are traced one ray at a time.
+const OCTANT_PACKET_FROM: u32 = 8;
 
 /// Closest-hit packets over BVHs of more levels than this are split by octant (a BVH8 of
 /// three levels holds up to about 1500 primitives, the Cornell box's two levels 32): in a
@@ -645,7 +653,7 @@ mod avx512 {
                     }
                 };
                 let lanes = st.live & pick(0, 4) & pick(1, 2) & pick(2, 1);
-                if lanes.count_ones() > SINGLE_AT_MOST {
+                if lanes.count_ones() >= OCTANT_PACKET_FROM {
                     traverse::<ANY_HIT>(accel, shapes, &r, st, lanes, Some(octant as usize));
                 } else {
                     let mut rest = lanes;
