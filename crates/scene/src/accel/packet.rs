@@ -212,19 +212,61 @@ const OCTANT_PACKET_FROM: u32 = 8;
 /// shallow tree the order of children hardly matters, and the split costs more than it saves.
 const ORDERED_ABOVE_DEPTH: usize = 3;
 
+/// When a packet query hands lanes to the single-ray code: the constants above by default;
+/// public so that tests can force every path (all-packet traversal, either child order).
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug)]
+pub struct PacketRules {
+    pub single_at_most: u32,
+    pub leaf_packet_from: u32,
+    pub octant_packet_from: u32,
+    pub ordered_above_depth: usize,
+}
+
+impl PacketRules {
+    pub const DEFAULT: PacketRules = PacketRules {
+        single_at_most: SINGLE_AT_MOST,
+        leaf_packet_from: LEAF_PACKET_FROM,
+        octant_packet_from: OCTANT_PACKET_FROM,
+        ordered_above_depth: ORDERED_ABOVE_DEPTH,
+    };
+}
+
 impl Accel {
     /// Per lane the closest hit, as [`Accel::intersect`] gives it for that lane's ray (when
     /// two primitives are hit at exactly the same distance, possibly the other one).
     pub fn intersect_packet(&self, shapes: &[Shape], rays: &RayPacket) -> PacketHits {
-        let mut st = State::new(rays);
-        self.packet_query::<false>(shapes, rays, &mut st);
-        st.hits()
+        self.intersect_packet_with(shapes, rays, &PacketRules::DEFAULT)
     }
 
     /// Bit i set when lane i is blocked before its t_max ([`Accel::occluded`] per lane).
     pub fn occluded_packet(&self, shapes: &[Shape], rays: &RayPacket) -> u32 {
+        self.occluded_packet_with(shapes, rays, &PacketRules::DEFAULT)
+    }
+
+    /// [`Accel::intersect_packet`] with other hand-off rules (tests).
+    #[doc(hidden)]
+    pub fn intersect_packet_with(
+        &self,
+        shapes: &[Shape],
+        rays: &RayPacket,
+        rules: &PacketRules,
+    ) -> PacketHits {
         let mut st = State::new(rays);
-        self.packet_query::<true>(shapes, rays, &mut st);
+        self.packet_query::<false>(shapes, rays, rules, &mut st);
+        st.hits()
+    }
+
+    /// [`Accel::occluded_packet`] with other hand-off rules (tests).
+    #[doc(hidden)]
+    pub fn occluded_packet_with(
+        &self,
+        shapes: &[Shape],
+        rays: &RayPacket,
+        rules: &PacketRules,
+    ) -> u32 {
+        let mut st = State::new(rays);
+        self.packet_query::<true>(shapes, rays, rules, &mut st);
         st.hit
     }
 
@@ -233,6 +275,7 @@ impl Accel {
         &self,
         shapes: &[Shape],
         rays: &RayPacket,
+        rules: &PacketRules,
         st: &mut State,
     ) {
         if st.live == 0 || self.is_empty() {
@@ -244,10 +287,11 @@ impl Accel {
             // `Accel::with_stack`) go ray by ray.
             if self.flat || self.depth < super::wide::STACK_SIZE {
                 // SAFETY: AVX-512F is available (compile-time check above).
-                unsafe { avx512::query::<ANY_HIT>(self, shapes, rays, st) };
+                unsafe { avx512::query::<ANY_HIT>(self, shapes, rays, rules, st) };
                 return;
             }
         }
+        let _ = rules;
         self.lane_by_lane::<ANY_HIT>(shapes, rays, st);
     }
 
@@ -627,6 +671,7 @@ mod avx512 {
         accel: &Accel,
         shapes: &[Shape],
         rays: &RayPacket,
+        rules: &PacketRules,
         st: &mut State,
     ) {
         let r = PacketRay::new(rays);
@@ -641,7 +686,7 @@ mod avx512 {
             }
             return;
         }
-        if !ANY_HIT && accel.depth > ORDERED_ABOVE_DEPTH {
+        if !ANY_HIT && accel.depth > rules.ordered_above_depth {
             // One packet per octant: every lane then visits children nearest first for its
             // own direction, as its single-ray traversal does.
             for octant in 0..8u32 {
@@ -653,8 +698,8 @@ mod avx512 {
                     }
                 };
                 let lanes = st.live & pick(0, 4) & pick(1, 2) & pick(2, 1);
-                if lanes.count_ones() >= OCTANT_PACKET_FROM {
-                    traverse::<ANY_HIT>(accel, shapes, &r, st, lanes, Some(octant as usize));
+                if lanes.count_ones() >= rules.octant_packet_from {
+                    traverse::<ANY_HIT>(accel, shapes, &r, rules, st, lanes, Some(octant as usize));
                 } else {
                     let mut rest = lanes;
                     while rest != 0 {
@@ -665,7 +710,7 @@ mod avx512 {
                 }
             }
         } else {
-            traverse::<ANY_HIT>(accel, shapes, &r, st, st.live, None);
+            traverse::<ANY_HIT>(accel, shapes, &r, rules, st, st.live, None);
         }
     }
 
@@ -676,6 +721,7 @@ mod avx512 {
         accel: &Accel,
         shapes: &[Shape],
         r: &PacketRay,
+        rules: &PacketRules,
         st: &mut State,
         lanes: u32,
         fixed_octant: Option<usize>,
@@ -692,7 +738,7 @@ mod avx512 {
             if lanes == 0 {
                 continue;
             }
-            if lanes.count_ones() <= SINGLE_AT_MOST {
+            if lanes.count_ones() <= rules.single_at_most {
                 let mut rest = lanes;
                 while rest != 0 {
                     let l = rest.trailing_zeros() as usize;
@@ -716,7 +762,7 @@ mod avx512 {
                 }
                 let offset = meta & 0x1f;
                 let count = (meta >> 5).count_ones();
-                if m.count_ones() >= LEAF_PACKET_FROM {
+                if m.count_ones() >= rules.leaf_packet_from {
                     let base = (node.primitive_base_idx + offset) as usize;
                     for i in 0..count as usize {
                         let live = m & st.live;
