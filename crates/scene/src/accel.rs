@@ -5,7 +5,7 @@ mod chunked;
 mod packet;
 mod wide;
 
-pub use packet::{PacketHits, RayPacket, PACKET_LANES};
+pub use packet::{PacketHits, PacketRules, RayPacket, PACKET_LANES};
 
 use crate::shape::{Instance, Shape, ShapeKind};
 use glam::{UVec2, Vec2, Vec3};

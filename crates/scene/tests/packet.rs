@@ -12,12 +12,15 @@
 //! * (e) a flat scene (at most four primitives, tested without the BVH).
 //!
 //! Packets have random active masks (empty and full ones included) and a mix of finite and
-//! infinite t_max. `Scene::intersect_packet` must equal `Scene::intersect` per lane (point,
+//! infinite t_max. Each packet is traced with the default hand-off rules and with rules that
+//! force every path: all lanes in the packet traversal to the leaves (children in the first
+//! lane's order, or one packet per octant), and all leaves tested lane by lane. `Scene::intersect_packet` must equal `Scene::intersect` per lane (point,
 //! normal, uv, shape, t), on scenes loaded from `scenes/`.
 
 use glam::{Affine3A, Quat, Vec2, Vec3};
 use radia_formats::load_mitsuba_xml;
 use radia_math::Ray;
+use radia_scene::accel::PacketRules;
 use radia_scene::shape::{Shape, ShapeKind};
 use radia_scene::{Accel, Geometry, Mesh, RayPacket, Scene, PACKET_LANES};
 use rand::{Rng, SeedableRng};
@@ -182,7 +185,39 @@ fn camera_packets(rng: &mut Pcg64, eye: Vec3, target: Vec3, count: usize) -> Vec
         .collect()
 }
 
-/// Counts of what was compared.
+/// The rule sets every packet is traced with: the default, and rules forcing each path.
+const RULES: [(&str, PacketRules); 4] = [
+    ("default", PacketRules::DEFAULT),
+    (
+        "all packet, first lane's order",
+        PacketRules {
+            single_at_most: 0,
+            leaf_packet_from: 1,
+            octant_packet_from: 1,
+            ordered_above_depth: usize::MAX,
+        },
+    ),
+    (
+        "all packet, by octant",
+        PacketRules {
+            single_at_most: 0,
+            leaf_packet_from: 1,
+            octant_packet_from: 1,
+            ordered_above_depth: 0,
+        },
+    ),
+    (
+        "leaves lane by lane",
+        PacketRules {
+            single_at_most: 0,
+            leaf_packet_from: 17,
+            octant_packet_from: 1,
+            ordered_above_depth: usize::MAX,
+        },
+    ),
+];
+
+/// Counts of what was compared (lanes × rule sets).
 #[derive(Default, Debug)]
 struct Tally {
     lanes: usize,
@@ -201,51 +236,58 @@ fn check(accel: &Accel, shapes: &[Shape], packets: &[RayPacket], brute: bool) ->
         .map(|(k, p)| {
             let mut tally = Tally::default();
             let mut failures = Vec::new();
-            let hits = accel.intersect_packet(shapes, p);
-            let occluded = accel.occluded_packet(shapes, p);
-            if hits.hit & !p.active != 0 || occluded & !p.active != 0 {
-                failures.push(format!("packet {k}: an inactive lane reports a hit"));
-            }
-            for l in 0..PACKET_LANES {
-                if p.active & (1 << l) == 0 {
-                    continue;
-                }
-                tally.lanes += 1;
-                let ray = p.ray(l);
-                let single = accel.intersect(shapes, &ray);
-                let got = hits.hit(l);
-                let same = match (got, single) {
-                    (None, None) => true,
-                    (Some(a), Some(b)) if a.prim == b.prim => {
-                        a.t.to_bits() == b.t.to_bits()
-                            && a.bary.x.to_bits() == b.bary.x.to_bits()
-                            && a.bary.y.to_bits() == b.bary.y.to_bits()
-                            && a.inner == b.inner
+            let runs = RULES.map(|(_, rules)| {
+                (
+                    accel.intersect_packet_with(shapes, p, &rules),
+                    accel.occluded_packet_with(shapes, p, &rules),
+                )
+            });
+            for (l, ray) in (0..PACKET_LANES).map(|l| (l, p.ray(l))) {
+                let active = p.active & (1 << l) != 0;
+                let single = active.then(|| accel.intersect(shapes, &ray)).flatten();
+                let single_occluded = active && accel.occluded(shapes, &ray);
+                for ((name, _), (hits, occluded)) in RULES.iter().zip(&runs) {
+                    if !active {
+                        if (hits.hit | occluded) & (1 << l) != 0 {
+                            failures.push(format!("{name}: packet {k}: inactive lane {l} hit"));
+                        }
+                        continue;
                     }
-                    (Some(a), Some(b)) => {
-                        tally.ties += 1;
-                        a.t.to_bits() == b.t.to_bits()
+                    tally.lanes += 1;
+                    let got = hits.hit(l);
+                    let same = match (got, single) {
+                        (None, None) => true,
+                        (Some(a), Some(b)) if a.prim == b.prim => {
+                            a.t.to_bits() == b.t.to_bits()
+                                && a.bary.x.to_bits() == b.bary.x.to_bits()
+                                && a.bary.y.to_bits() == b.bary.y.to_bits()
+                                && a.inner == b.inner
+                        }
+                        (Some(a), Some(b)) => {
+                            tally.ties += 1;
+                            a.t.to_bits() == b.t.to_bits()
+                        }
+                        _ => false,
+                    };
+                    tally.hits += got.is_some() as usize;
+                    if !same {
+                        failures.push(format!(
+                            "{name}: packet {k} lane {l} {ray:?}: packet {got:?}, single {single:?}"
+                        ));
                     }
-                    _ => false,
-                };
-                tally.hits += got.is_some() as usize;
-                if !same {
-                    failures.push(format!(
-                        "packet {k} lane {l} {ray:?}: packet {got:?}, single {single:?}"
-                    ));
+                    let occ = occluded & (1 << l) != 0;
+                    tally.occluded += occ as usize;
+                    if occ != single_occluded {
+                        failures.push(format!("{name}: packet {k} lane {l}: occluded {occ}"));
+                    }
                 }
-                if brute {
+                if active && brute {
                     let b = accel.intersect_brute_force(shapes, &bounds, &ray);
                     if b.map(|h| h.t.to_bits()) != single.map(|h| h.t.to_bits()) {
                         failures.push(format!(
                             "packet {k} lane {l}: brute {b:?}, single {single:?}"
                         ));
                     }
-                }
-                let occ = occluded & (1 << l) != 0;
-                tally.occluded += occ as usize;
-                if occ != accel.occluded(shapes, &ray) {
-                    failures.push(format!("packet {k} lane {l}: occluded {occ}"));
                 }
             }
             (tally, failures)
@@ -279,7 +321,7 @@ fn incoherent_packets_match_single_rays_and_brute_force() {
     let packets = incoherent_packets(&mut rng, 16_000);
     let tally = check(&accel, &shapes, &packets, true);
     assert!(
-        tally.lanes >= 100_000 && tally.hits > 50_000 && tally.occluded > 50_000,
+        tally.lanes >= 4 * 100_000 && tally.hits > 4 * 50_000 && tally.occluded > 4 * 50_000,
         "{tally:?}"
     );
 }
@@ -299,7 +341,10 @@ fn coherent_packets_match_single_rays_and_brute_force() {
         3000,
     ));
     let tally = check(&accel, &shapes, &packets, true);
-    assert!(tally.lanes > 50_000 && tally.hits > 40_000, "{tally:?}");
+    assert!(
+        tally.lanes > 4 * 50_000 && tally.hits > 4 * 40_000,
+        "{tally:?}"
+    );
 }
 
 /// (c) Spheres and disks (analytic, tested lane by lane) among triangles.
@@ -339,7 +384,7 @@ fn analytic_shapes_in_packets_match_single_rays() {
         2000,
     ));
     let tally = check(&accel, &shapes, &packets, true);
-    assert!(tally.hits > 20_000, "{tally:?}");
+    assert!(tally.hits > 4 * 20_000, "{tally:?}");
 }
 
 /// (d) Instances of shape groups (rotated, scaled, mirrored) beside ordinary shapes.
@@ -427,7 +472,7 @@ fn instances_in_packets_match_single_rays() {
         2000,
     ));
     let tally = check(&accel, &shapes, &packets, true);
-    assert!(tally.hits > 6_000, "{tally:?}");
+    assert!(tally.hits > 4 * 6_000, "{tally:?}");
 }
 
 /// (e) A flat scene: two triangles, a sphere and a disk (every query tests all four).
@@ -484,7 +529,7 @@ fn flat_scene_packets_match_single_rays() {
         packet(&rays, 0xffff)
     }));
     let tally = check(&accel, &shapes, &packets, true);
-    assert!(tally.hits > 20_000, "{tally:?}");
+    assert!(tally.hits > 4 * 20_000, "{tally:?}");
 }
 
 fn load(name: &str) -> Scene {

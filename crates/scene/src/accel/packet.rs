@@ -12,7 +12,9 @@
 //! and Mark 2012 ("Combining Single and Packet-Ray Tracing for Arbitrary Ray Distributions
 //! on the Intel MIC Architecture"), a subtree reached by few lanes is finished by the
 //! single-ray traversal of each of them ([`SINGLE_AT_MOST`]), and a leaf reached by few lanes
-//! is tested by each lane's 8-wide triangle test ([`LEAF_PACKET_FROM`]).
+//! is tested by each lane's 8-wide triangle test ([`LEAF_PACKET_FROM`]). Closest-hit packets
+//! over deep trees are split by ray octant first ([`ORDERED_ABOVE_DEPTH`]), so that each lane
+//! meets children nearest first, as packets of one octant do in Wald et al. 2001.
 //!
 //! Answers are those of [`Accel::intersect`] and [`Accel::occluded`] lane by lane: every
 //! primitive test computes the single-ray test's bits, and a lane visits every node whose
@@ -163,27 +165,108 @@ impl State {
     }
 }
 
+// How the rules below were chosen (`cargo bench -p radia-scene --bench bvh`, one core of
+// an AVX-512 machine shared with another build, so ±10 % noise; packet time / time of the
+// same rays one at a time, `Accel` queries):
+//
+// * One 16-lane node test costs about four single-ray (8-wide AVX2) node tests, and one
+//   triangle broadcast against 16 lanes about one single-ray test of a leaf's triangles, so
+//   a node or leaf pays off from about four lanes on: [`SINGLE_AT_MOST`] = 3 and
+//   [`LEAF_PACKET_FROM`] = 4. With 6 instead of 3, million/camera went from 0.53 to 0.58 and
+//   nothing improved beyond the noise.
+// * Children in the order of each node's first lane: camera tiles 0.46 (Cornell box) and
+//   0.53 (10⁶ triangles), occlusion 0.55–0.90 on every set of both scenes, Cornell bounce
+//   0.87; but 10⁶-triangle bounce rays (a tile's rays leave one point in all directions of
+//   a hemisphere) 1.21–1.29: lanes whose octant differs from the first lane's explore far
+//   subtrees before near ones, and without their near hit's t_max they cull little.
+// * One packet per octant (rays of one octant share the near-to-far order of the CWBVH's
+//   child slots): 10⁶-triangle bounce 1.06, camera unchanged (a tile's rays share an
+//   octant), but the Cornell box's bounce 1.26 and shadow segments 1.26 on both scenes
+//   (groups of three lanes or fewer then go one by one, with the packet's set-up on top).
+// * After the watertight set-up was moved into lanes (it had cost about as much as a
+//   Cornell-box query per lane): Cornell camera 0.21, bounce 0.55, occlusion 0.25–0.60.
+//   Octant groups of fewer than [`OCTANT_PACKET_FROM`] = 8 lanes traced one by one:
+//   10⁶-triangle bounce 62.7–65.5 ms against 65.5–68.5 ms with groups from 4 lanes and 67.5
+//   ms with every lane alone, single rays 63–79 ms over the same runs (noise).
+// * A lane leaving the packet when its subtree is sparse, to be traced again from the root
+//   with its t_max so far (closest hit): 10⁶-triangle bounce 1.09, but camera 0.88 instead
+//   of 0.53 (lanes lose the packet for good at the first sparse subtree).
+//
+// Hence: occlusion (any hit, where the order matters little) and shallow trees take the
+// first lane's order; closest-hit queries in trees deeper than [`ORDERED_ABOVE_DEPTH`] one
+// packet per octant.
+
 /// Subtrees reached by at most this many lanes are finished by each lane's single-ray
-/// traversal. Measured (`benches/bvh.rs`, see [`Accel::intersect_packet`]).
+/// traversal (Benthin et al. 2012's hybrid); see the measurements above.
 const SINGLE_AT_MOST: u32 = 3;
 
 /// Leaves reached by at least this many lanes have their triangles tested against the packet;
-/// fewer lanes test them with their own 8-wide test. Measured as [`SINGLE_AT_MOST`].
+/// fewer lanes test them with their own 8-wide test.
 const LEAF_PACKET_FROM: u32 = 4;
+
+/// Octant groups (see [`ORDERED_ABOVE_DEPTH`]) of fewer lanes are traced one ray at a time.
+const OCTANT_PACKET_FROM: u32 = 8;
+
+/// Closest-hit packets over BVHs of more levels than this are split by octant (a BVH8 of
+/// three levels holds up to about 1500 primitives, the Cornell box's two levels 32): in a
+/// shallow tree the order of children hardly matters, and the split costs more than it saves.
+const ORDERED_ABOVE_DEPTH: usize = 3;
+
+/// When a packet query hands lanes to the single-ray code: the constants above by default;
+/// public so that tests can force every path (all-packet traversal, either child order).
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug)]
+pub struct PacketRules {
+    pub single_at_most: u32,
+    pub leaf_packet_from: u32,
+    pub octant_packet_from: u32,
+    pub ordered_above_depth: usize,
+}
+
+impl PacketRules {
+    pub const DEFAULT: PacketRules = PacketRules {
+        single_at_most: SINGLE_AT_MOST,
+        leaf_packet_from: LEAF_PACKET_FROM,
+        octant_packet_from: OCTANT_PACKET_FROM,
+        ordered_above_depth: ORDERED_ABOVE_DEPTH,
+    };
+}
 
 impl Accel {
     /// Per lane the closest hit, as [`Accel::intersect`] gives it for that lane's ray (when
     /// two primitives are hit at exactly the same distance, possibly the other one).
     pub fn intersect_packet(&self, shapes: &[Shape], rays: &RayPacket) -> PacketHits {
-        let mut st = State::new(rays);
-        self.packet_query::<false>(shapes, rays, &mut st);
-        st.hits()
+        self.intersect_packet_with(shapes, rays, &PacketRules::DEFAULT)
     }
 
     /// Bit i set when lane i is blocked before its t_max ([`Accel::occluded`] per lane).
     pub fn occluded_packet(&self, shapes: &[Shape], rays: &RayPacket) -> u32 {
+        self.occluded_packet_with(shapes, rays, &PacketRules::DEFAULT)
+    }
+
+    /// [`Accel::intersect_packet`] with other hand-off rules (tests).
+    #[doc(hidden)]
+    pub fn intersect_packet_with(
+        &self,
+        shapes: &[Shape],
+        rays: &RayPacket,
+        rules: &PacketRules,
+    ) -> PacketHits {
         let mut st = State::new(rays);
-        self.packet_query::<true>(shapes, rays, &mut st);
+        self.packet_query::<false>(shapes, rays, rules, &mut st);
+        st.hits()
+    }
+
+    /// [`Accel::occluded_packet`] with other hand-off rules (tests).
+    #[doc(hidden)]
+    pub fn occluded_packet_with(
+        &self,
+        shapes: &[Shape],
+        rays: &RayPacket,
+        rules: &PacketRules,
+    ) -> u32 {
+        let mut st = State::new(rays);
+        self.packet_query::<true>(shapes, rays, rules, &mut st);
         st.hit
     }
 
@@ -192,6 +275,7 @@ impl Accel {
         &self,
         shapes: &[Shape],
         rays: &RayPacket,
+        rules: &PacketRules,
         st: &mut State,
     ) {
         if st.live == 0 || self.is_empty() {
@@ -203,10 +287,11 @@ impl Accel {
             // `Accel::with_stack`) go ray by ray.
             if self.flat || self.depth < super::wide::STACK_SIZE {
                 // SAFETY: AVX-512F is available (compile-time check above).
-                unsafe { avx512::query::<ANY_HIT>(self, shapes, rays, st) };
+                unsafe { avx512::query::<ANY_HIT>(self, shapes, rays, rules, st) };
                 return;
             }
         }
+        let _ = rules;
         self.lane_by_lane::<ANY_HIT>(shapes, rays, st);
     }
 
@@ -240,7 +325,7 @@ mod avx512 {
 
     /// Per-packet constants of the node and triangle tests, lane by lane what `NodeRay` and
     /// `WatertightRay` hold for one ray.
-    struct PacketRay {
+    struct PacketRay<'a> {
         o: [__m512; 3],
         /// 1 / d (±∞ for a zero component), and its magnitude.
         inv: [__m512; 3],
@@ -252,51 +337,64 @@ mod avx512 {
         s: [__m512; 3],
         /// `ksel[j][a]`: lanes whose k_j is axis a (a = 0, 1; the rest have axis 2).
         ksel: [[__mmask16; 2]; 3],
-        rays: [Ray; PACKET_LANES],
-        wrays: [WatertightRay; PACKET_LANES],
+        /// The rays, for the tests done one lane at a time.
+        packet: &'a RayPacket,
     }
 
-    impl PacketRay {
+    /// Per lane, `x` where `m[0]` is set, else `y` where `m[1]` is set, else `z`.
+    #[inline(always)]
+    unsafe fn select3(m: [__mmask16; 2], [x, y, z]: [__m512; 3]) -> __m512 {
+        _mm512_mask_blend_ps(m[0], _mm512_mask_blend_ps(m[1], z, y), x)
+    }
+
+    impl<'a> PacketRay<'a> {
         #[inline(always)]
-        unsafe fn new(p: &RayPacket) -> Self {
-            let rays: [Ray; PACKET_LANES] = std::array::from_fn(|l| p.ray(l));
-            let wrays: [WatertightRay; PACKET_LANES] =
-                std::array::from_fn(|l| WatertightRay::new(&rays[l]));
+        unsafe fn new(p: &'a RayPacket) -> Self {
             let load = |v: &[f32; PACKET_LANES]| _mm512_loadu_ps(v.as_ptr());
             let o = [load(&p.o[0]), load(&p.o[1]), load(&p.o[2])];
+            let d = [load(&p.d[0]), load(&p.d[1]), load(&p.d[2])];
             let one = _mm512_set1_ps(1.0);
             // `NodeRay::new`: Vec3A::ONE / d, per component.
-            let inv = [
-                _mm512_div_ps(one, load(&p.d[0])),
-                _mm512_div_ps(one, load(&p.d[1])),
-                _mm512_div_ps(one, load(&p.d[2])),
-            ];
+            let inv = d.map(|v| _mm512_div_ps(one, v));
             let inv_abs = inv.map(|v| _mm512_abs_ps(v));
             let zero = _mm512_setzero_ps();
             let neg = inv.map(|v| _mm512_cmp_ps_mask::<_CMP_LT_OQ>(v, zero));
-            let mut ok = [[0.0f32; PACKET_LANES]; 3];
-            let mut s = [[0.0f32; PACKET_LANES]; 3];
-            let mut ksel = [[0u16; 2]; 3];
-            for (l, w) in wrays.iter().enumerate() {
-                for j in 0..3 {
-                    ok[j][l] = w.o[w.k[j]];
-                    s[j][l] = w.s[j];
-                    if w.k[j] < 2 {
-                        ksel[j][w.k[j]] |= 1 << l;
-                    }
-                }
-            }
+
+            // `WatertightRay::new` in lanes (the same comparisons, division and products):
+            // k_z the dominant axis of |d|, k_x and k_y the next ones, swapped when d[k_z] < 0.
+            let a = d.map(|v| _mm512_abs_ps(v));
+            let gt = |x, y| _mm512_cmp_ps_mask::<_CMP_GT_OQ>(x, y);
+            let x_over_y = gt(a[0], a[1]);
+            let kz0 = x_over_y & gt(a[0], a[2]);
+            let kz1 = !x_over_y & gt(a[1], a[2]);
+            let kz2 = !(kz0 | kz1);
+            let dz = select3([kz0, kz1], d);
+            let swap = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(dz, zero);
+            // Unswapped, k_z = 0, 1, 2 gives k_x = 1, 2, 0 and k_y = 2, 0, 1.
+            let kx = [(kz2 & !swap) | (kz1 & swap), (kz0 & !swap) | (kz2 & swap)];
+            let ky = [(kz1 & !swap) | (kz2 & swap), (kz2 & !swap) | (kz0 & swap)];
+            let kz = [kz0, kz1];
+            let sz = _mm512_div_ps(one, dz);
             Self {
                 o,
                 inv,
                 inv_abs,
                 neg,
-                ok: ok.map(|v| load(&v)),
-                s: s.map(|v| load(&v)),
-                ksel,
-                rays,
-                wrays,
+                ok: [select3(kx, o), select3(ky, o), select3(kz, o)],
+                s: [
+                    _mm512_mul_ps(select3(kx, d), sz),
+                    _mm512_mul_ps(select3(ky, d), sz),
+                    sz,
+                ],
+                ksel: [kx, ky, kz],
+                packet: p,
             }
+        }
+
+        /// Lane `l`'s ray.
+        #[inline(always)]
+        fn ray(&self, l: usize) -> Ray {
+            self.packet.ray(l)
         }
 
         /// Coordinate k_j of `p` per lane.
@@ -482,9 +580,15 @@ mod avx512 {
         while lanes != 0 {
             let l = lanes.trailing_zeros() as usize;
             lanes &= lanes - 1;
-            if let Some((t, bary, inner)) =
-                accel.intersect_prim(shapes, &r.wrays[l], &r.rays[l], prim, st.t[l], ANY_HIT)
-            {
+            let ray = r.ray(l);
+            if let Some((t, bary, inner)) = accel.intersect_prim(
+                shapes,
+                &WatertightRay::new(&ray),
+                &ray,
+                prim,
+                st.t[l],
+                ANY_HIT,
+            ) {
                 st.record::<ANY_HIT>(l, prim as u32, t, bary, inner);
             }
         }
@@ -501,7 +605,8 @@ mod avx512 {
         node: u32,
         l: usize,
     ) {
-        let (ray, wray) = (&r.rays[l], &r.wrays[l]);
+        let ray = &r.ray(l);
+        let wray = &WatertightRay::new(ray);
         let node_ray = wide::NodeRay::new(ray.o, ray.d);
         let mut found = Found {
             bary: Vec2::ZERO,
@@ -537,14 +642,15 @@ mod avx512 {
         mask: u32,
         l: usize,
     ) {
+        let ray = r.ray(l);
         let mut found = Found {
             bary: Vec2::ZERO,
             inner: 0,
         };
         if let Some((prim, t)) = accel.intersect_leaves(
             shapes,
-            &r.wrays[l],
-            &r.rays[l],
+            &WatertightRay::new(&ray),
+            &ray,
             base,
             mask,
             st.t[l],
@@ -565,6 +671,7 @@ mod avx512 {
         accel: &Accel,
         shapes: &[Shape],
         rays: &RayPacket,
+        rules: &PacketRules,
         st: &mut State,
     ) {
         let r = PacketRay::new(rays);
@@ -579,9 +686,49 @@ mod avx512 {
             }
             return;
         }
+        if !ANY_HIT && accel.depth > rules.ordered_above_depth {
+            // One packet per octant: every lane then visits children nearest first for its
+            // own direction, as its single-ray traversal does.
+            for octant in 0..8u32 {
+                let pick = |a: usize, bit: u32| {
+                    if octant & bit != 0 {
+                        r.neg[a] as u32
+                    } else {
+                        !r.neg[a] as u32 & 0xffff
+                    }
+                };
+                let lanes = st.live & pick(0, 4) & pick(1, 2) & pick(2, 1);
+                if lanes.count_ones() >= rules.octant_packet_from {
+                    traverse::<ANY_HIT>(accel, shapes, &r, rules, st, lanes, Some(octant as usize));
+                } else {
+                    let mut rest = lanes;
+                    while rest != 0 {
+                        let l = rest.trailing_zeros() as usize;
+                        rest &= rest - 1;
+                        single::<ANY_HIT>(accel, shapes, &r, st, 0, l);
+                    }
+                }
+            }
+        } else {
+            traverse::<ANY_HIT>(accel, shapes, &r, rules, st, st.live, None);
+        }
+    }
+
+    /// The packet traversal for the lanes `lanes` from the root; children ordered for
+    /// `octant` (None: each node's first lane's).
+    #[inline(always)]
+    unsafe fn traverse<const ANY_HIT: bool>(
+        accel: &Accel,
+        shapes: &[Shape],
+        r: &PacketRay,
+        rules: &PacketRules,
+        st: &mut State,
+        lanes: u32,
+        fixed_octant: Option<usize>,
+    ) {
         // (node index, lanes) per entry.
         let mut stack = [(0u32, 0u32); STACK];
-        stack[0] = (0, st.live);
+        stack[0] = (0, lanes);
         let mut sp = 1usize;
         let nodes = &accel.bvh.nodes;
         while sp > 0 {
@@ -591,38 +738,38 @@ mod avx512 {
             if lanes == 0 {
                 continue;
             }
-            if lanes.count_ones() <= SINGLE_AT_MOST {
+            if lanes.count_ones() <= rules.single_at_most {
                 let mut rest = lanes;
                 while rest != 0 {
                     let l = rest.trailing_zeros() as usize;
                     rest &= rest - 1;
-                    single::<ANY_HIT>(accel, shapes, &r, st, index, l);
+                    single::<ANY_HIT>(accel, shapes, r, st, index, l);
                 }
                 continue;
             }
             let node = &nodes[index as usize];
-            let hits = children(node, &r, lanes as u16, _mm512_load_ps(st.t.as_ptr()));
+            let hits = children(node, r, lanes as u16, _mm512_load_ps(st.t.as_ptr()));
 
             // Leaf children first (as the single-ray traversal): against the packet where
             // enough lanes reached them, else each lane's primitives by its own test.
             let mut lane_prims = [0u32; PACKET_LANES];
             let mut few = 0u32;
-            for c in 0..8 {
+            for (c, &m) in hits.iter().enumerate() {
                 let meta = node.child_meta[c] as u32;
-                let m = hits[c] as u32;
+                let m = m as u32;
                 if m == 0 || node.imask & (1 << c) != 0 {
                     continue;
                 }
                 let offset = meta & 0x1f;
                 let count = (meta >> 5).count_ones();
-                if m.count_ones() >= LEAF_PACKET_FROM {
+                if m.count_ones() >= rules.leaf_packet_from {
                     let base = (node.primitive_base_idx + offset) as usize;
                     for i in 0..count as usize {
                         let live = m & st.live;
                         if live == 0 {
                             break;
                         }
-                        primitive::<ANY_HIT>(accel, shapes, &r, st, base + i, live);
+                        primitive::<ANY_HIT>(accel, shapes, r, st, base + i, live);
                     }
                 } else {
                     few |= m;
@@ -640,16 +787,17 @@ mod avx512 {
                 let l = rest.trailing_zeros() as usize;
                 rest &= rest - 1;
                 let base = node.primitive_base_idx;
-                lane_leaves::<ANY_HIT>(accel, shapes, &r, st, base, lane_prims[l], l);
+                lane_leaves::<ANY_HIT>(accel, shapes, r, st, base, lane_prims[l], l);
             }
 
             // Inner children, nearest first for the first lane's octant: the CWBVH puts
             // child slot c ^ octant nearer than the slots after it (Ylitie et al. 2017,
             // `wide::traverse`'s order), so they are pushed farthest first.
             let l = lanes.trailing_zeros();
-            let octant = (((r.neg[0] >> l) & 1) << 2
-                | ((r.neg[1] >> l) & 1) << 1
-                | ((r.neg[2] >> l) & 1)) as usize;
+            let octant = fixed_octant.unwrap_or(
+                (((r.neg[0] >> l) & 1) << 2 | ((r.neg[1] >> l) & 1) << 1 | ((r.neg[2] >> l) & 1))
+                    as usize,
+            );
             for i in (0..8).rev() {
                 let c = i ^ octant;
                 let m = hits[c] as u32 & st.live;
