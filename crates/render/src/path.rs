@@ -104,7 +104,7 @@ impl PathIntegrator {
         loop {
             stats.rays += 1;
             let hit = scene.intersect(&path.ray);
-            let (shadow, goes_on) = self.bounce(scene, &mut path, hit, sampler, stats);
+            let (shadow, goes_on) = self.bounce(scene, &mut path, hit.as_ref(), sampler, stats);
             if let Some(shadow) = shadow {
                 let transmittance = scene.transmittance(&shadow.ray, shadow.crossings);
                 shadow.resolve(&mut path, transmittance);
@@ -145,13 +145,19 @@ impl PathIntegrator {
         &self,
         scene: &Scene,
         path: &mut PathState,
-        mut hit: Option<SurfaceInteraction>,
+        hit: Option<&SurfaceInteraction>,
         sampler: &mut SampleStream<'_, S>,
         stats: &mut PathStats,
     ) -> (Option<PendingShadow>, bool) {
-        if self.hide_emitters && path.primary {
-            hit = skip_area_emitters(scene, &mut path.ray, hit, stats);
-        }
+        // (Borrowed, not moved: a copy of the record made just before its fields are read
+        // stalls on store forwarding, measured in the packet loop.)
+        let skipped;
+        let hit = if self.hide_emitters && path.primary {
+            skipped = skip_area_emitters(scene, &mut path.ray, hit.copied(), stats);
+            skipped.as_ref()
+        } else {
+            hit
+        };
         let Some(si) = hit else {
             // ---- Escaped: environment emission (none without an environment) ----
             // With hide_emitters an escaped camera ray gives 0 (path.cpp's `valid_ray`).
@@ -168,10 +174,10 @@ impl PathIntegrator {
 
         // ---- Emission of the surface that was hit ----
         // (With hide_emitters, camera rays never stop at an emitter: see above.)
-        if let Some((ei, emitter)) = scene.surface_emitter(&si) {
-            let le = emitter.eval_surface(&si);
+        if let Some((ei, emitter)) = scene.surface_emitter(si) {
+            let le = emitter.eval_surface(si);
             if le != Spectrum::ZERO {
-                let w = self.mis_emitter_hit(scene, ei, Some(&si), path.ray.d, &path.prev);
+                let w = self.mis_emitter_hit(scene, ei, Some(si), path.ray.d, &path.prev);
                 path.result += path.beta * le * w;
             }
         }
@@ -180,8 +186,8 @@ impl PathIntegrator {
             return (None, false);
         }
 
-        let bsdf = scene.bsdf(&si);
-        let sp = scene.shading_point(&si);
+        let bsdf = scene.bsdf(si);
+        let sp = scene.shading_point(si);
         let depth = path.depth;
 
         // ---- Emitter sampling (next-event estimation) ----
@@ -190,7 +196,7 @@ impl PathIntegrator {
             sampler.seek(layout::bounce(depth) + layout::LIGHT_POSITION);
             // Shadow rays may cross null surfaces, each a bounce (see the module docs).
             let crossings = self.max_depth.saturating_sub(depth + 2);
-            shadow = self.sample_emitter(scene, &si, &sp, bsdf, crossings, path.beta, sampler);
+            shadow = self.sample_emitter(scene, si, &sp, bsdf, crossings, path.beta, sampler);
             match shadow {
                 Some(_) => stats.rays += 1,
                 // Nothing to trace: the estimate is 0, added as the full estimate would be

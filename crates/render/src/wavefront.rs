@@ -12,12 +12,12 @@
 use crate::integrator::CameraSample;
 use crate::path::{PathIntegrator, PathState, PathStats, PendingShadow};
 use glam::Vec2;
-use radia_math::{Ray, Spectrum};
+use radia_math::Spectrum;
 use radia_sampling::{SampleStream, Sampler};
-use radia_scene::{Scene, SurfaceInteraction};
+use radia_scene::{RayPacket, Scene, SurfaceInteraction, PACKET_LANES};
 
 /// Paths in flight per packet.
-pub const LANES: usize = 16;
+pub const LANES: usize = PACKET_LANES;
 
 /// A path in flight and where its result goes.
 struct Lane<'a, S> {
@@ -66,10 +66,14 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         }
 
         // ---- Closest hits, all lanes at once ----
-        let rays: [Option<Ray>; LANES] =
-            std::array::from_fn(|k| lanes[k].as_ref().map(|l| l.path.ray));
-        stats.rays += rays.iter().flatten().count() as u64;
-        intersect_lanes(scene, &rays, &mut hits);
+        let mut rays = RayPacket::new();
+        for (k, lane) in lanes.iter().enumerate() {
+            if let Some(lane) = lane {
+                rays.set(k, &lane.path.ray);
+            }
+        }
+        stats.rays += u64::from(rays.active.count_ones());
+        scene.intersect_packet(&rays, &mut hits);
 
         // ---- Each path's bounce: emission, NEE sample, BSDF sample ----
         let mut goes_on = [false; LANES];
@@ -78,7 +82,7 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
                 let (shadow, more) = integrator.bounce(
                     scene,
                     &mut lane.path,
-                    hits[k].take(),
+                    hits[k].as_ref(),
                     &mut lane.stream,
                     stats,
                 );
@@ -88,13 +92,13 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         }
 
         // ---- Shadow rays, all lanes at once ----
-        let shadows: [Option<Ray>; LANES] = std::array::from_fn(|k| {
-            lanes[k]
-                .as_ref()
-                .and_then(|l| l.shadow.as_ref())
-                .map(|s| s.ray)
-        });
-        let blocked = occluded_lanes(scene, &shadows);
+        let mut shadows = RayPacket::new();
+        for (k, lane) in lanes.iter().enumerate() {
+            if let Some(shadow) = lane.as_ref().and_then(|l| l.shadow.as_ref()) {
+                shadows.set(k, &shadow.ray);
+            }
+        }
+        let blocked = scene.occluded_packet(&shadows);
         for (k, lane) in lanes.iter_mut().enumerate() {
             let Some(lane) = lane else { continue };
             if let Some(shadow) = lane.shadow.take() {
@@ -116,28 +120,4 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
             }
         }
     }
-}
-
-/// The closest hit of each lane's ray.
-#[inline]
-fn intersect_lanes(
-    scene: &Scene,
-    rays: &[Option<Ray>; LANES],
-    hits: &mut [Option<SurfaceInteraction>; LANES],
-) {
-    for (ray, hit) in rays.iter().zip(hits.iter_mut()) {
-        *hit = ray.as_ref().and_then(|r| scene.intersect(r));
-    }
-}
-
-/// Bit k set when lane k's ray is blocked before its end.
-#[inline]
-fn occluded_lanes(scene: &Scene, rays: &[Option<Ray>; LANES]) -> u32 {
-    let mut blocked = 0;
-    for (k, ray) in rays.iter().enumerate() {
-        if ray.as_ref().is_some_and(|r| scene.occluded(r)) {
-            blocked |= 1 << k;
-        }
-    }
-    blocked
 }
