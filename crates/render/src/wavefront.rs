@@ -101,13 +101,16 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         let blocked = scene.occluded_packet(&shadows);
         for (k, lane) in lanes.iter_mut().enumerate() {
             let Some(lane) = lane else { continue };
-            if let Some(shadow) = lane.shadow.take() {
+            // Read in place (a copy made just before its fields are read stalls on store
+            // forwarding).
+            if let Some(shadow) = &lane.shadow {
                 let transmittance = if blocked & (1 << k) != 0 {
                     scene.transmittance_of_blocked(&shadow.ray, shadow.crossings)
                 } else {
                     1.0
                 };
                 shadow.resolve(&mut lane.path, transmittance);
+                lane.shadow = None;
             }
         }
 
