@@ -169,11 +169,11 @@ impl State {
 // an AVX-512 machine shared with another build, so ±10 % noise; packet time / time of the
 // same rays one at a time, `Accel` queries):
 //
-// * One 16-lane node test costs about four single-ray (8-wide AVX2) node tests, and one
-//   triangle broadcast against 16 lanes about one single-ray test of a leaf's triangles, so
-//   a node or leaf pays off from about four lanes on: [`SINGLE_AT_MOST`] = 3 and
-//   [`LEAF_PACKET_FROM`] = 4. With 6 instead of 3, million/camera went from 0.53 to 0.58 and
-//   nothing improved beyond the noise.
+// * By instruction count, one 16-lane node test costs about four single-ray (8-wide AVX2)
+//   node tests, and one triangle broadcast against 16 lanes about one single-ray test of a
+//   leaf's triangles, so a node or leaf should pay off from about four lanes on:
+//   [`SINGLE_AT_MOST`] = 3 and [`LEAF_PACKET_FROM`] = 4. With 6 instead of 3, 10⁶-triangle
+//   camera tiles went from 0.55 to 0.60 and nothing improved beyond the noise.
 // * Children in the order of each node's first lane: camera tiles 0.46 (Cornell box) and
 //   0.53 (10⁶ triangles), occlusion 0.55–0.90 on every set of both scenes, Cornell bounce
 //   0.87; but 10⁶-triangle bounce rays (a tile's rays leave one point in all directions of
@@ -192,9 +192,14 @@ impl State {
 //   with its t_max so far (closest hit): 10⁶-triangle bounce 1.09, but camera 0.88 instead
 //   of 0.53 (lanes lose the packet for good at the first sparse subtree).
 //
-// Hence: occlusion (any hit, where the order matters little) and shallow trees take the
-// first lane's order; closest-hit queries in trees deeper than [`ORDERED_ABOVE_DEPTH`] one
-// packet per octant.
+// * Occlusion over deep trees traced ray by ray when no octant has 8 lanes (random shadow
+//   segments), else as one packet: 10⁶-triangle shadow segments 0.90–0.96 (1.0–1.05 before),
+//   light 0.89, camera 0.44–0.58.
+//
+// Hence: shallow trees take one packet in the first lane's order; in trees deeper than
+// [`ORDERED_ABOVE_DEPTH`], occlusion takes one packet in the first lane's order if some
+// octant has [`OCTANT_PACKET_FROM`] lanes (else every lane alone), and closest hit one packet
+// per octant of that many lanes (the other lanes alone).
 
 /// Subtrees reached by at most this many lanes are finished by each lane's single-ray
 /// traversal (Benthin et al. 2012's hybrid); see the measurements above.
@@ -204,12 +209,14 @@ const SINGLE_AT_MOST: u32 = 3;
 /// fewer lanes test them with their own 8-wide test.
 const LEAF_PACKET_FROM: u32 = 4;
 
-/// Octant groups (see [`ORDERED_ABOVE_DEPTH`]) of fewer lanes are traced one ray at a time.
+/// In deep trees ([`ORDERED_ABOVE_DEPTH`]), closest-hit octant groups of fewer lanes are
+/// traced one ray at a time, and so are occlusion packets without such a group.
 const OCTANT_PACKET_FROM: u32 = 8;
 
-/// Closest-hit packets over BVHs of more levels than this are split by octant (a BVH8 of
-/// three levels holds up to about 1500 primitives, the Cornell box's two levels 32): in a
-/// shallow tree the order of children hardly matters, and the split costs more than it saves.
+/// Closest-hit packets over BVHs of more levels than this are split by octant, and
+/// occlusion packets checked for coherence (a BVH8 of three levels holds up to about 1500
+/// primitives, the Cornell box's two levels 32): in a shallow tree the order of children
+/// hardly matters, and the split costs more than it saves.
 const ORDERED_ABOVE_DEPTH: usize = 3;
 
 /// When a packet query hands lanes to the single-ray code: the constants above by default;
@@ -686,31 +693,55 @@ mod avx512 {
             }
             return;
         }
-        if !ANY_HIT && accel.depth > rules.ordered_above_depth {
-            // One packet per octant: every lane then visits children nearest first for its
-            // own direction, as its single-ray traversal does.
-            for octant in 0..8u32 {
-                let pick = |a: usize, bit: u32| {
-                    if octant & bit != 0 {
-                        r.neg[a] as u32
-                    } else {
-                        !r.neg[a] as u32 & 0xffff
-                    }
-                };
-                let lanes = st.live & pick(0, 4) & pick(1, 2) & pick(2, 1);
-                if lanes.count_ones() >= rules.octant_packet_from {
-                    traverse::<ANY_HIT>(accel, shapes, &r, rules, st, lanes, Some(octant as usize));
-                } else {
-                    let mut rest = lanes;
-                    while rest != 0 {
-                        let l = rest.trailing_zeros() as usize;
-                        rest &= rest - 1;
-                        single::<ANY_HIT>(accel, shapes, &r, st, 0, l);
-                    }
-                }
-            }
-        } else {
+        if accel.depth <= rules.ordered_above_depth {
             traverse::<ANY_HIT>(accel, shapes, &r, rules, st, st.live, None);
+            return;
+        }
+        // The lanes of each ray octant.
+        let groups: [u32; 8] = std::array::from_fn(|octant| {
+            let pick = |a: usize, bit: usize| {
+                if octant & bit != 0 {
+                    r.neg[a] as u32
+                } else {
+                    !r.neg[a] as u32 & 0xffff
+                }
+            };
+            st.live & pick(0, 4) & pick(1, 2) & pick(2, 1)
+        });
+        let dense = |lanes: u32| lanes.count_ones() >= rules.octant_packet_from;
+        if ANY_HIT {
+            // Occlusion: the order of children matters little, so one packet, unless no
+            // octant has enough lanes (incoherent rays) for the packet to pay off.
+            if groups.iter().any(|&g| dense(g)) {
+                traverse::<ANY_HIT>(accel, shapes, &r, rules, st, st.live, None);
+            } else {
+                alone::<ANY_HIT>(accel, shapes, &r, st, st.live);
+            }
+            return;
+        }
+        // Closest hit: one packet per octant, so that every lane visits children nearest
+        // first for its own direction, as its single-ray traversal does.
+        for (octant, &lanes) in groups.iter().enumerate() {
+            if dense(lanes) {
+                traverse::<ANY_HIT>(accel, shapes, &r, rules, st, lanes, Some(octant));
+            } else {
+                alone::<ANY_HIT>(accel, shapes, &r, st, lanes);
+            }
+        }
+    }
+
+    /// The lanes `lanes` one by one, from the root.
+    fn alone<const ANY_HIT: bool>(
+        accel: &Accel,
+        shapes: &[Shape],
+        r: &PacketRay,
+        st: &mut State,
+        mut lanes: u32,
+    ) {
+        while lanes != 0 {
+            let l = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            single::<ANY_HIT>(accel, shapes, r, st, 0, l);
         }
     }
 
