@@ -449,6 +449,7 @@ impl Shape {
     }
 
     /// A point uniformly distributed over light primitive `face` (density 1 / its area).
+    #[inline]
     pub fn sample_position(&self, face: u32, u: Vec2) -> PositionSample {
         match &self.kind {
             ShapeKind::Mesh(mesh) => {
@@ -508,6 +509,7 @@ impl Shape {
     ///   `SampleSphericalTriangle`), unless that solid angle is too small or too large for the
     ///   algorithm to be stable (pbrt-v4's thresholds), then by area;
     /// * disks, and spheres from inside: by area.
+    #[inline]
     pub fn sample_direction(&self, ref_p: Vec3, face: u32, u: Vec2) -> Option<DirectionSample> {
         match &self.kind {
             ShapeKind::Sphere {
@@ -559,6 +561,7 @@ impl Shape {
 
     /// Solid-angle density of [`Shape::sample_direction`] from `ref_p` returning the point `p`
     /// with geometric normal `n` on light primitive `face`.
+    #[inline]
     pub fn pdf_direction(&self, ref_p: Vec3, face: u32, p: Vec3, n: Vec3) -> f32 {
         match &self.kind {
             ShapeKind::Sphere { center, radius, .. } => {
