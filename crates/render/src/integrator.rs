@@ -61,7 +61,9 @@ impl Integrator for PathIntegrator {
         PathIntegrator::li(self, scene, ray, sampler, stats)
     }
 
-    /// Sixteen paths at a time, their rays traced together (`crate::wavefront`).
+    /// Sixteen paths at a time, their rays traced together (`crate::wavefront`), where the
+    /// scene's rays gain from tracing as packets; one at a time otherwise (the image is the
+    /// same either way).
     fn li_many<'a, S: Sampler + 'a>(
         &self,
         scene: &Scene,
@@ -69,6 +71,13 @@ impl Integrator for PathIntegrator {
         out: &mut [(Vec2, Spectrum)],
         stats: &mut PathStats,
     ) {
-        crate::wavefront::li_many(self, scene, sample, out, stats)
+        if scene.accel().packets_pay() {
+            crate::wavefront::li_many(self, scene, sample, out, stats)
+        } else {
+            for (i, o) in out.iter_mut().enumerate() {
+                let mut cs = sample(i);
+                *o = (cs.pos, self.li(scene, cs.ray, &mut cs.stream, stats));
+            }
+        }
     }
 }
