@@ -28,18 +28,17 @@ pub(crate) trait Integrator: Sync {
         stats: &mut PathStats,
     ) -> Spectrum;
 
-    /// The radiance of the camera samples `sample(0)`, …, `sample(out.len() - 1)`, with
-    /// their film positions, into `out` in that order. One [`Integrator::li`] after another
-    /// unless the integrator runs many samples at once.
+    /// The radiance of the camera samples `samples` (as many as `out` holds), with their
+    /// film positions, into `out` in their order. One [`Integrator::li`] after another unless
+    /// the integrator runs many samples at once.
     fn li_many<'a, S: Sampler + 'a>(
         &self,
         scene: &Scene,
-        sample: impl Fn(usize) -> CameraSample<'a, S>,
+        samples: impl Iterator<Item = CameraSample<'a, S>>,
         out: &mut [(Vec2, Spectrum)],
         stats: &mut PathStats,
     ) {
-        for (i, o) in out.iter_mut().enumerate() {
-            let mut cs = sample(i);
+        for (o, mut cs) in out.iter_mut().zip(samples) {
             *o = (
                 cs.pos,
                 self.li(scene, cs.ray, cs.pos, &mut cs.stream, stats),
@@ -61,23 +60,14 @@ impl Integrator for PathIntegrator {
         PathIntegrator::li(self, scene, ray, sampler, stats)
     }
 
-    /// Sixteen paths at a time, their rays traced together (`crate::wavefront`), where the
-    /// scene's rays gain from tracing as packets; one at a time otherwise (the image is the
-    /// same either way).
+    /// Sixteen paths at a time, their rays traced together (`crate::wavefront`).
     fn li_many<'a, S: Sampler + 'a>(
         &self,
         scene: &Scene,
-        sample: impl Fn(usize) -> CameraSample<'a, S>,
+        samples: impl Iterator<Item = CameraSample<'a, S>>,
         out: &mut [(Vec2, Spectrum)],
         stats: &mut PathStats,
     ) {
-        if scene.accel().packets_pay() {
-            crate::wavefront::li_many(self, scene, sample, out, stats)
-        } else {
-            for (i, o) in out.iter_mut().enumerate() {
-                let mut cs = sample(i);
-                *o = (cs.pos, self.li(scene, cs.ray, &mut cs.stream, stats));
-            }
-        }
+        crate::wavefront::li_many(self, scene, samples, out, stats)
     }
 }

@@ -300,6 +300,52 @@ impl Extras for AovIntegrator<'_> {
     }
 }
 
+/// The camera samples of a tile's pass in the film's order: pixel by pixel (rows, then
+/// columns), each pixel's sample indices in increasing order.
+struct TileSamples<'a, S> {
+    scene: &'a Scene,
+    sampler: &'a S,
+    seed: u64,
+    x0: u32,
+    x1: u32,
+    y1: u32,
+    spp: std::ops::Range<u32>,
+    /// The next sample: pixel (x, y), index s, and the pixel's key.
+    x: u32,
+    y: u32,
+    s: u32,
+    key: PixelKey,
+}
+
+impl<'a, S: Sampler> Iterator for TileSamples<'a, S> {
+    type Item = CameraSample<'a, S>;
+
+    #[inline]
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.y >= self.y1 {
+            return None;
+        }
+        let (x, y) = (self.x, self.y);
+        let mut stream = SampleStream::new(self.sampler, self.key, self.s);
+        stream.seek(layout::FILM);
+        let pos = Vec2::new(x as f32, y as f32) + stream.next_2d();
+        let film = &self.scene.film;
+        let ray = (self.scene.camera)
+            .generate_ray(pos / Vec2::new(film.width as f32, film.height as f32));
+        self.s += 1;
+        if self.s == self.spp.end {
+            self.s = self.spp.start;
+            self.x += 1;
+            if self.x == self.x1 {
+                self.x = self.x0;
+                self.y += 1;
+            }
+            self.key = PixelKey::new(self.seed, UVec2::new(self.x, self.y));
+        }
+        Some(CameraSample { pos, ray, stream })
+    }
+}
+
 /// The tile loop of `job` with a concrete sampler, so that its calls inline into the path loop.
 fn render_with<S: Sampler, I: Integrator, E: Extras>(
     job: &Job<'_>,
@@ -360,20 +406,20 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
                     // film in that order.
                     let nspp = (spp_end - spp_start) as usize;
                     let mut out = vec![(Vec2::ZERO, Spectrum::ZERO); (tw * th) as usize * nspp];
-                    let sample = |i: usize| {
-                        let p = (i / nspp) as u32;
-                        let (x, y) = (x0 + p % tw, y0 + p / tw);
-                        let key = PixelKey::new(seed, UVec2::new(x, y));
-                        let mut stream =
-                            SampleStream::new(sampler, key, spp_start + (i % nspp) as u32);
-                        stream.seek(layout::FILM);
-                        let pos = Vec2::new(x as f32, y as f32) + stream.next_2d();
-                        let ray = scene
-                            .camera
-                            .generate_ray(pos / Vec2::new(w as f32, h as f32));
-                        CameraSample { pos, ray, stream }
+                    let samples = TileSamples {
+                        scene,
+                        sampler,
+                        seed,
+                        x0,
+                        x1: x0 + tw,
+                        y1: y0 + th,
+                        spp: spp_start..spp_end,
+                        x: x0,
+                        y: y0,
+                        s: spp_start,
+                        key: PixelKey::new(seed, UVec2::new(x0, y0)),
                     };
-                    integrator.li_many(scene, sample, &mut out, &mut pstats);
+                    integrator.li_many(scene, samples, &mut out, &mut pstats);
                     for &(pos, l) in &out {
                         if l.is_finite() {
                             tile_film.add_sample(pos, l);

@@ -33,7 +33,7 @@ struct Lane<'a, S> {
 pub(crate) fn li_many<'a, S: Sampler + 'a>(
     integrator: &PathIntegrator,
     scene: &Scene,
-    sample: impl Fn(usize) -> CameraSample<'a, S>,
+    mut samples: impl Iterator<Item = CameraSample<'a, S>>,
     out: &mut [(Vec2, Spectrum)],
     stats: &mut PathStats,
 ) {
@@ -44,7 +44,7 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         // ---- Free lanes take the next camera samples ----
         for lane in lanes.iter_mut().filter(|l| l.is_none()) {
             while next < out.len() {
-                let cs = sample(next);
+                let Some(cs) = samples.next() else { break };
                 next += 1;
                 match integrator.start(cs.ray) {
                     Some(path) => {
