@@ -5,7 +5,7 @@
 //! non-watertight test or a too-tight box test would leak) with a soup of random small
 //! triangles (many near-coincident hits, thin and oblique boxes).
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use radia_bsdf::{Bsdf, Diffuse};
 use radia_math::Ray;
 use radia_scene::{shape::Shape, Accel, Geometry, Mesh};
@@ -13,71 +13,8 @@ use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use rayon::prelude::*;
 
-fn uv_sphere(center: Vec3, radius: f32, rings: u32, segments: u32) -> Mesh {
-    let mut positions = Vec::new();
-    let mut indices = Vec::new();
-    for r in 0..=rings {
-        let theta = std::f32::consts::PI * r as f32 / rings as f32;
-        for s in 0..segments {
-            let phi = 2.0 * std::f32::consts::PI * s as f32 / segments as f32;
-            positions.push(
-                center
-                    + radius
-                        * Vec3::new(
-                            theta.sin() * phi.cos(),
-                            theta.sin() * phi.sin(),
-                            theta.cos(),
-                        ),
-            );
-        }
-    }
-    for r in 0..rings {
-        for s in 0..segments {
-            let a = r * segments + s;
-            let b = r * segments + (s + 1) % segments;
-            let c = a + segments;
-            let d = b + segments;
-            indices.push([a, c, b]);
-            indices.push([b, c, d]);
-        }
-    }
-    Mesh {
-        positions,
-        indices,
-        ..Default::default()
-    }
-}
-
-fn soup(rng: &mut Pcg64, n: usize) -> Mesh {
-    let mut positions = Vec::new();
-    let mut indices = Vec::new();
-    for i in 0..n {
-        let c = random_in_cube(rng, 3.0);
-        for _ in 0..3 {
-            positions.push(c + random_in_cube(rng, 0.1));
-        }
-        let k = 3 * i as u32;
-        indices.push([k, k + 1, k + 2]);
-    }
-    Mesh {
-        positions,
-        indices,
-        ..Default::default()
-    }
-}
-
-/// A uniformly random point in the cube [−half, half]³.
-fn random_in_cube(rng: &mut Pcg64, half: f32) -> Vec3 {
-    Vec3::new(
-        rng.random_range(-half..half),
-        rng.random_range(-half..half),
-        rng.random_range(-half..half),
-    )
-}
-
-fn random_dir(rng: &mut Pcg64) -> Vec3 {
-    radia_sampling::warp::square_to_uniform_sphere(Vec2::new(rng.random(), rng.random()))
-}
+mod common;
+use common::{random_dir, random_in_cube, soup, uv_sphere};
 
 #[test]
 fn bvh_agrees_with_brute_force() {
@@ -100,7 +37,7 @@ fn agrees_with_brute_force(build: impl Fn(&[Shape]) -> Accel) {
             bsdf,
             None,
         ),
-        Shape::new(Geometry::Mesh(soup(&mut rng, 30_000)), bsdf, None),
+        Shape::new(Geometry::Mesh(soup(&mut rng, 30_000, 3.0, 0.1)), bsdf, None),
         Shape::new(
             Geometry::sphere(Vec3::new(2.5, 2.5, 2.5), 0.7, false),
             bsdf,
@@ -225,7 +162,7 @@ fn axis_aligned_rays_agree_with_brute_force() {
             0,
             None,
         ),
-        Shape::new(Geometry::Mesh(soup(&mut rng, 2_000)), 0, None),
+        Shape::new(Geometry::Mesh(soup(&mut rng, 2_000, 3.0, 0.1)), 0, None),
     ];
     let accel = Accel::build(&shapes);
     let bounds = accel.primitive_bounds(&shapes);
@@ -393,7 +330,7 @@ fn cwbvh_agrees_with_bvh2_on_a_million_triangles() {
             0,
             None,
         ),
-        Shape::new(Geometry::Mesh(soup(&mut rng, 400_000)), 0, None),
+        Shape::new(Geometry::Mesh(soup(&mut rng, 400_000, 3.0, 0.1)), 0, None),
     ];
     let accel = Accel::build(&shapes);
     assert!(accel.len() >= 1_000_000);
