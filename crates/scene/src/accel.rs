@@ -341,6 +341,8 @@ pub struct Accel {
     /// With a handful of primitives the box tests of a traversal cost more than they save:
     /// every query tests them all directly ([`Accel::FLAT_MAX`]).
     flat: bool,
+    /// Whether 16-ray packets share any work here ([`Accel::packets_pay`]).
+    packets_pay: bool,
     /// The bottom level of a two-level structure: one BVH per shape group, over the group's
     /// shapes in the group's space, built once however many instances place it. Instances
     /// are primitives of this (top-level) BVH, tested one at a time like analytic shapes, so
@@ -423,6 +425,7 @@ impl Accel {
                 analytic: None,
                 depth: 0,
                 flat: false,
+                packets_pay: false,
                 groups,
             };
         }
@@ -479,6 +482,15 @@ impl Accel {
             bits
         });
         let flat = total <= Self::FLAT_MAX;
+        // Triangles and spheres are tested against a packet's lanes at once; disks and
+        // instances lane by lane, so a flat scene of those only is traced ray by ray.
+        let lane_tested = |si: u32| {
+            matches!(
+                shapes[si as usize].kind,
+                ShapeKind::Mesh(_) | ShapeKind::Sphere { .. }
+            )
+        };
+        let packets_pay = !flat || members.iter().any(|&si| lane_tested(si));
         Self {
             bvh,
             owners,
@@ -486,6 +498,7 @@ impl Accel {
             analytic,
             depth,
             flat,
+            packets_pay,
             groups,
         }
     }
