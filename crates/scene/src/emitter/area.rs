@@ -46,19 +46,20 @@ impl AreaLight {
     ) -> Option<EmitterSample> {
         let shape = &shapes[self.shape as usize];
         let ds = shape.sample_direction(ref_p, face, u)?;
-        if ds.n.dot(ds.d) >= 0.0 {
+        let (p, n, d) = (Vec3::from(ds.p), Vec3::from(ds.n), Vec3::from(ds.d));
+        if n.dot(d) >= 0.0 {
             return None;
         }
         let radiance = match &self.radiance {
             Texture::Constant(c) => *c,
-            t => t.eval(&ShadingPoint::at_uv(shape.uv_at(face, ds.p))),
+            t => t.eval(&ShadingPoint::at_uv(shape.uv_at(face, p))),
         };
         Some(EmitterSample {
-            d: ds.d,
+            d,
             dist: ds.dist,
-            p: ds.p,
-            n: ds.n,
-            p_error: ds.p_error,
+            p,
+            n,
+            p_error: ds.p_error.into(),
             pdf: ds.pdf,
             radiance,
             is_delta: false,
