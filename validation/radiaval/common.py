@@ -305,7 +305,9 @@ class RadiaRenderer:
         self.sampler, self.rfilter = sampler, rfilter
         self.extra_defines = list(extra_defines)
         self.bias = bias  # multiply output (only for demonstrating the test's teeth)
-        self.tmp = tempfile.mkdtemp(prefix="radia-val-")
+        # Removed with this object (or at exit): every test and benchmark makes several.
+        self._tmp = tempfile.TemporaryDirectory(prefix="radia-val-")
+        self.tmp = self._tmp.name
         self.invalid = 0
         self.infos = []
 

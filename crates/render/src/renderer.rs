@@ -317,6 +317,32 @@ struct TileSamples<'a, S> {
     key: PixelKey,
 }
 
+impl<'a, S: Sampler> TileSamples<'a, S> {
+    /// The samples `spp` of the pixels of the `w` × `h` tile at (`x0`, `y0`).
+    fn new(
+        scene: &'a Scene,
+        sampler: &'a S,
+        seed: u64,
+        (x0, y0): (u32, u32),
+        (w, h): (u32, u32),
+        spp: std::ops::Range<u32>,
+    ) -> Self {
+        Self {
+            scene,
+            sampler,
+            seed,
+            x0,
+            x1: x0 + w,
+            y1: y0 + h,
+            s: spp.start,
+            spp,
+            x: x0,
+            y: y0,
+            key: PixelKey::new(seed, UVec2::new(x0, y0)),
+        }
+    }
+}
+
 impl<'a, S: Sampler> Iterator for TileSamples<'a, S> {
     type Item = CameraSample<'a, S>;
 
@@ -400,25 +426,40 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
                 let mut tile_extras = extras.film(fx, fy, fw, fh, filter);
                 let mut pstats = PathStats::default();
                 let mut invalid = 0;
-                if !E::PER_SAMPLE {
+                let samples = TileSamples::new(
+                    scene,
+                    sampler,
+                    seed,
+                    (x0, y0),
+                    (tw, th),
+                    spp_start..spp_end,
+                );
+                if E::PER_SAMPLE {
+                    // One sample at a time, with its extras beside it.
+                    for CameraSample {
+                        pos,
+                        ray,
+                        mut stream,
+                    } in samples
+                    {
+                        extras.add(scene, &mut tile_extras, pos, &ray);
+                        let l = if extras.beauty() {
+                            integrator.li(scene, ray, pos, &mut stream, &mut pstats)
+                        } else {
+                            Spectrum::ZERO
+                        };
+                        if l.is_finite() {
+                            tile_film.add_sample(pos, l);
+                        } else {
+                            invalid += 1;
+                        }
+                    }
+                } else {
                     // The tile's samples in pixel order, handed to the integrator at once
                     // (the path integrator runs many of them together), then added to the
                     // film in that order.
                     let nspp = (spp_end - spp_start) as usize;
                     let mut out = vec![(Vec2::ZERO, Spectrum::ZERO); (tw * th) as usize * nspp];
-                    let samples = TileSamples {
-                        scene,
-                        sampler,
-                        seed,
-                        x0,
-                        x1: x0 + tw,
-                        y1: y0 + th,
-                        spp: spp_start..spp_end,
-                        x: x0,
-                        y: y0,
-                        s: spp_start,
-                        key: PixelKey::new(seed, UVec2::new(x0, y0)),
-                    };
                     integrator.li_many(scene, samples, &mut out, &mut pstats);
                     for &(pos, l) in &out {
                         if l.is_finite() {
@@ -427,35 +468,9 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
                             invalid += 1;
                         }
                     }
-                    if cancel.load(Ordering::Relaxed) {
-                        return None;
-                    }
                 }
-                for y in (y0..y0 + th).filter(|_| E::PER_SAMPLE) {
-                    for x in x0..x0 + tw {
-                        let key = PixelKey::new(seed, UVec2::new(x, y));
-                        for s in spp_start..spp_end {
-                            let mut stream = SampleStream::new(sampler, key, s);
-                            stream.seek(layout::FILM);
-                            let pos = Vec2::new(x as f32, y as f32) + stream.next_2d();
-                            let film_pos = pos / Vec2::new(w as f32, h as f32);
-                            let ray = scene.camera.generate_ray(film_pos);
-                            extras.add(scene, &mut tile_extras, pos, &ray);
-                            let l = if extras.beauty() {
-                                integrator.li(scene, ray, pos, &mut stream, &mut pstats)
-                            } else {
-                                Spectrum::ZERO
-                            };
-                            if l.is_finite() {
-                                tile_film.add_sample(pos, l);
-                            } else {
-                                invalid += 1;
-                            }
-                        }
-                    }
-                    if cancel.load(Ordering::Relaxed) {
-                        return None;
-                    }
+                if cancel.load(Ordering::Relaxed) {
+                    return None;
                 }
                 let n = (tw * th * (spp_end - spp_start)) as u64;
                 progress(done.fetch_add(n, Ordering::Relaxed) + n);
