@@ -165,7 +165,7 @@ def main(argv=None):
     a = ap.parse_args(argv)
     mode = QUICK if a.quick else FULL
     try:
-        radia = radia_package()
+        radia = radia_package(binary_option=False)
     except ValidationError as e:
         log(f"compare_aov: {e}")
         return 2

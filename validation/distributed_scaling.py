@@ -73,7 +73,7 @@ def main(argv=None):
     ap.add_argument("--radia", default=DEFAULT_RADIA, help="the binary for the baseline")
     a = ap.parse_args(argv)
     binary = check_radia(a.radia)
-    radia = radia_package()
+    radia = radia_package(binary_option=False)  # --radia is only the baseline's binary
     import radia.distributed as rd
     import ray
 

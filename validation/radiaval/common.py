@@ -415,17 +415,19 @@ class PackageRenderer:
     passes = RadiaRenderer.passes
 
 
-def radia_package():
+def radia_package(binary_option=True):
     """The radia Python package, refused with the remedy when it is missing or was built from
     other sources than the checkout's (validation/setup stamps the venv with the hash of the
-    sources it built; radiaval/sources.py computes both)."""
+    sources it built; radiaval/sources.py computes both). `binary_option`: the calling tool
+    takes --radia, so the remedy names it too."""
+    or_binary = (", or pass --radia target/release/radia to render with the binary"
+                 if binary_option else "")
     try:
         import radia
     except ImportError as e:
         raise ValidationError(
             f"the radia Python package is not installed in {sys.prefix} ({e}): run "
-            "`bash validation/setup` (it builds crates/python into validation/.venv), or pass "
-            "--radia target/release/radia to render with the binary")
+            f"`bash validation/setup` (it builds crates/python into validation/.venv){or_binary}")
     stamp = os.path.join(sys.prefix, ".radia-package-stamp")
     if os.path.exists(stamp):
         from .sources import source_hash
@@ -434,8 +436,7 @@ def radia_package():
         if built != source_hash(REPO_ROOT):
             raise ValidationError(
                 f"the radia Python package in {sys.prefix} was built from other sources than "
-                f"{REPO_ROOT}'s crates/ now: run `bash validation/setup` to rebuild it, or pass "
-                "--radia target/release/radia to render with the binary")
+                f"{REPO_ROOT}'s crates/ now: run `bash validation/setup` to rebuild it{or_binary}")
     return radia
 
 

@@ -61,6 +61,11 @@ class PackageRendererTest(unittest.TestCase):
                 f.write("0" * 64 + "\n")
             with self.assertRaisesRegex(ValidationError, "validation/setup.*--radia"):
                 radia_package()
+            # A tool without --radia (compare_aov.py) is not told to pass it.
+            with self.assertRaises(ValidationError) as caught:
+                radia_package(binary_option=False)
+            self.assertIn("validation/setup", str(caught.exception))
+            self.assertNotIn("--radia", str(caught.exception))
             with open(os.path.join(d, ".radia-package-stamp"), "w") as f:
                 f.write(source_hash(common.REPO_ROOT) + "\n")
             radia_package()
