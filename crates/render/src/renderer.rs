@@ -426,14 +426,8 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
                 let mut tile_extras = extras.film(fx, fy, fw, fh, filter);
                 let mut pstats = PathStats::default();
                 let mut invalid = 0;
-                let samples = TileSamples::new(
-                    scene,
-                    sampler,
-                    seed,
-                    (x0, y0),
-                    (tw, th),
-                    spp_start..spp_end,
-                );
+                let samples =
+                    TileSamples::new(scene, sampler, seed, (x0, y0), (tw, th), spp_start..spp_end);
                 if E::PER_SAMPLE {
                     // One sample at a time, with its extras beside it.
                     for CameraSample {

@@ -82,15 +82,14 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         let mut goes_on = [false; LANES];
         for (k, lane) in lanes.iter_mut().enumerate() {
             if let Some(lane) = lane {
-                let (shadow, more) = integrator.bounce(
+                goes_on[k] = integrator.bounce(
                     scene,
                     &mut lane.path,
                     hits[k].as_ref(),
                     &mut lane.stream,
                     stats,
+                    &mut lane.shadow,
                 );
-                lane.shadow = shadow;
-                goes_on[k] = more;
             }
         }
 
