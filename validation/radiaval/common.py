@@ -6,11 +6,13 @@ import hashlib
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
 import time
 import warnings
+import weakref
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -306,8 +308,8 @@ class RadiaRenderer:
         self.extra_defines = list(extra_defines)
         self.bias = bias  # multiply output (only for demonstrating the test's teeth)
         # Removed with this object (or at exit): every test and benchmark makes several.
-        self._tmp = tempfile.TemporaryDirectory(prefix="radia-val-")
-        self.tmp = self._tmp.name
+        self.tmp = tempfile.mkdtemp(prefix="radia-val-")
+        weakref.finalize(self, shutil.rmtree, self.tmp, True)
         self.invalid = 0
         self.infos = []
 
