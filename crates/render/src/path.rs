@@ -171,8 +171,10 @@ impl PathIntegrator {
             if let Some(env) = scene.environment {
                 if !(self.hide_emitters && path.primary) {
                     let emitter = &scene.emitters[env as usize];
-                    let le = emitter.eval_environment(path.ray.d);
-                    let w = self.mis_emitter_hit(scene, env, None, path.ray.d, &path.prev);
+                    let (le, pdf_dir) = emitter.eval_environment_pdf(path.ray.d);
+                    let w = self.mis_emitter_hit(&path.prev, |ctx| {
+                        scene.pdf_environment(ctx, env, pdf_dir)
+                    });
                     path.result += path.beta * le * w;
                 }
             }
@@ -184,7 +186,9 @@ impl PathIntegrator {
         if let Some((ei, emitter)) = scene.surface_emitter(si) {
             let le = emitter.eval_surface(si);
             if le != Spectrum::ZERO {
-                let w = self.mis_emitter_hit(scene, ei, Some(si), path.ray.d, &path.prev);
+                let w = self.mis_emitter_hit(&path.prev, |ctx| {
+                    scene.pdf_emitter_direction(ctx, ei, Some(si), path.ray.d)
+                });
                 path.result += path.beta * le * w;
             }
         }
@@ -259,17 +263,11 @@ impl PathIntegrator {
         beta_max != 0.0
     }
 
-    /// MIS weight of emission found by BSDF sampling from `prev`: the emitter's density
-    /// includes the probability that light selection picks it from there.
+    /// MIS weight of emission found by BSDF sampling from `prev`: `pdf_em` gives the
+    /// emitter's density from there, which includes the probability that light selection
+    /// picks it (not asked for after a delta lobe, which emitter sampling cannot follow).
     #[inline]
-    fn mis_emitter_hit(
-        &self,
-        scene: &Scene,
-        emitter: u32,
-        si: Option<&SurfaceInteraction>,
-        d: Vec3,
-        prev: &PrevVertex,
-    ) -> f32 {
+    fn mis_emitter_hit(&self, prev: &PrevVertex, pdf_em: impl FnOnce(&LightContext) -> f32) -> f32 {
         if prev.bsdf_delta {
             return 1.0;
         }
@@ -277,8 +275,7 @@ impl PathIntegrator {
             p: prev.p,
             n: prev.n,
         };
-        let pdf_em = scene.pdf_emitter_direction(&ctx, emitter, si, d);
-        power_heuristic(prev.bsdf_pdf, pdf_em)
+        power_heuristic(prev.bsdf_pdf, pdf_em(&ctx))
     }
 
     /// One next-event estimation sample up to its shadow ray: L·f·cos / pdf with the MIS

@@ -196,19 +196,40 @@ impl Envmap {
 
     /// Bilinear lookup in the emitter's frame (see the module docs).
     fn eval_local(&self, d: Vec3) -> Spectrum {
-        let (w, h) = (self.width, self.height);
+        self.lookup(d).radiance(self)
+    }
+
+    /// Radiance arriving from world direction `d` and the density with which
+    /// [`Envmap::sample_direction`] returns it: [`Envmap::eval`] and
+    /// [`Envmap::pdf_direction`] bit for bit, from one atan2 and one acos (what a ray that
+    /// escapes needs for its MIS weight; the two apart find the same angles twice).
+    #[inline]
+    pub fn eval_pdf(&self, d: Vec3) -> (Spectrum, f32) {
+        let d = (self.to_local * d).normalize();
+        let at = self.lookup(d);
+        let pdf = if self.rows.is_none() {
+            0.0
+        } else {
+            at.pdf(self, d)
+        };
+        (at.radiance(self), pdf)
+    }
+
+    /// Where the unit direction `d` (emitter frame) falls in the map: what both the radiance
+    /// lookup and the density need.
+    #[inline(always)]
+    fn lookup(&self, d: Vec3) -> Lookup {
+        let w = self.width;
         let mut u = radia_math::trig::atan2(d.x, -d.z) * INV_TWO_PI;
         u -= u.floor();
-        let v = safe_acos(d.y) * INV_PI;
         let x = u * w as f32 - 0.5;
         let x0 = x.floor();
-        let fx = x - x0;
-        let i0 = wrap_column(x0, w);
-        let i1 = if i0 + 1 == w { 0 } else { i0 + 1 };
-        let y = v * (h - 1) as f32;
-        let j0 = (y.floor().max(0.0) as usize).min(h - 2);
-        let fy = (y - j0 as f32).clamp(0.0, 1.0);
-        self.lerp_texels(i0, i1, j0, fx, fy)
+        Lookup {
+            i0: wrap_column(x0, w),
+            fx: x - x0,
+            // v · (H − 1), v = θ / π: the texel row, and the guess of the cell row.
+            y: safe_acos(d.y) * INV_PI * (self.height - 1) as f32,
+        }
     }
 
     /// Bilinear interpolation between texels (i0, j), (i1, j), (i0, j + 1) and (i1, j + 1)
@@ -263,28 +284,14 @@ impl Envmap {
         ((p - p0) / (p1 - p0)).clamp(0.0, 1.0)
     }
 
-    /// The sampling cell (column i, row j) of a unit direction in the emitter's frame, and the
-    /// direction's coordinates (s, t) in it (see the module docs).
-    #[inline]
-    fn cell_of(&self, d: Vec3) -> (usize, usize, Vec2) {
-        let w = self.width;
-        let mut u = radia_math::trig::atan2(d.x, -d.z) * INV_TWO_PI;
-        u -= u.floor();
-        let x = u * w as f32 - 0.5;
-        let x0 = x.floor();
-        let i = wrap_column(x0, w);
-        let j = self.cell_row(d.y);
-        (i, j, Vec2::new((x - x0).clamp(0.0, 1.0), self.cell_t(j, d)))
-    }
-
     /// The row of cells holding directions of cos θ = `cos_theta`: the number of inner texel
     /// rows 1..H − 1 above it (cos θⱼ > cos θ), by comparison with the same cos θ table
-    /// sampling interpolates in. The row θ / Δθ is the guess, which the comparisons then
-    /// correct by the round-off of acos (a step at most, in practice): no binary search.
+    /// sampling interpolates in. `guess` = θ / Δθ (the [`Lookup`]'s `y`) is where the search
+    /// starts; the comparisons then correct it by the round-off of acos (a step at most, in
+    /// practice): no binary search.
     #[inline]
-    fn cell_row(&self, cos_theta: f32) -> usize {
+    fn cell_row(&self, cos_theta: f32, guess: f32) -> usize {
         let last = self.height - 2;
-        let guess = safe_acos(cos_theta) * INV_PI * (self.height - 1) as f32;
         // `as` saturates: NaN gives 0, as the comparisons below then keep it.
         let mut j = (guess as usize).min(last);
         while j > 0 && !(self.row_cos[j] > cos_theta) {
@@ -325,11 +332,14 @@ impl Envmap {
             radia_math::trig::sin_cos_turns((i as f32 + 0.5 + st.x) / self.width as f32);
         let local = Vec3::new(sin_phi * sin_theta, cos_theta, -cos_phi * sin_theta);
         let d = (self.to_world * local).normalize();
-        // Exactly `pdf_direction(d)`: the density at the direction returned, which differs
-        // from w(st) · inv_total by the round-off of the direction (relatively, up to ~1e-5
-        // where the weights change a thousandfold across a cell). Zero only on an edge
-        // between zero-weight corners, where a sample lands with probability zero.
-        let pdf = self.pdf_local((self.to_local * d).normalize());
+        // The density of the point drawn, w(st) / Σ w̄ Ω, as pbrt-v4's image light returns
+        // its map's density at the sample (`lights.cpp`, `ImageInfiniteLight::SampleLi`).
+        // `pdf_direction(d)` gives the same up to the round-off of the direction (relatively
+        // ~1e-5 where the weights change a thousandfold across a cell; test
+        // `envmap_mis_compensation_is_consistent`); finding d's cell again cost an atan2, an
+        // acos and two normalisations per sample. Zero only on an edge between zero-weight
+        // corners, where a sample lands with probability zero.
+        let pdf = warp::bilerp(st, corners) * self.inv_total;
         if pdf.is_nan() || pdf <= 0.0 {
             return None;
         }
@@ -369,8 +379,37 @@ impl Envmap {
     /// Solid-angle density at a unit direction in the emitter's frame.
     #[inline]
     fn pdf_local(&self, d: Vec3) -> f32 {
-        let (i, j, st) = self.cell_of(d);
-        warp::bilerp(st, self.corners(i, j)) * self.inv_total
+        self.lookup(d).pdf(self, d)
+    }
+}
+
+/// A direction's place in the map ([`Envmap::lookup`]).
+struct Lookup {
+    /// The texel column left of it (the sampling cell's column too) and the fraction across.
+    i0: usize,
+    fx: f32,
+    /// θ / Δθ, in texel rows from the zenith.
+    y: f32,
+}
+
+impl Lookup {
+    /// The radiance: bilinear between the four texels around the direction.
+    #[inline(always)]
+    fn radiance(&self, e: &Envmap) -> Spectrum {
+        let (w, h) = (e.width, e.height);
+        let i1 = if self.i0 + 1 == w { 0 } else { self.i0 + 1 };
+        let j0 = (self.y.floor().max(0.0) as usize).min(h - 2);
+        let fy = (self.y - j0 as f32).clamp(0.0, 1.0);
+        e.lerp_texels(self.i0, i1, j0, self.fx, fy)
+    }
+
+    /// The sampling density at the unit direction `d` (emitter frame) this is the lookup
+    /// of: the weight bilinear in the cell coordinates (s, t), over the total.
+    #[inline(always)]
+    fn pdf(&self, e: &Envmap, d: Vec3) -> f32 {
+        let j = e.cell_row(d.y, self.y);
+        let st = Vec2::new(self.fx.clamp(0.0, 1.0), e.cell_t(j, d));
+        warp::bilerp(st, e.corners(self.i0, j)) * e.inv_total
     }
 }
 
@@ -413,6 +452,7 @@ mod tests {
             };
             let e = Envmap::new(&image, 1.0, Affine3A::IDENTITY, false);
             let search = |c: f32| e.row_cos[1..e.height - 1].partition_point(|&r| r > c);
+            let guess = |c: f32| safe_acos(c) * INV_PI * (e.height - 1) as f32;
             let mut probes = vec![f32::NAN, 1.0, -1.0, 0.0, -0.0];
             for &r in &e.row_cos {
                 probes.extend([r, r.next_up(), r.next_down()]);
@@ -421,7 +461,7 @@ mod tests {
                 probes.push(1.0 - 2.0 * k as f32 / 10_000.0);
             }
             for c in probes {
-                assert_eq!(e.cell_row(c), search(c), "{w}x{h}, cos θ = {c}");
+                assert_eq!(e.cell_row(c, guess(c)), search(c), "{w}x{h}, cos θ = {c}");
             }
         }
     }

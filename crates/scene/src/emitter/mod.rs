@@ -193,6 +193,17 @@ impl Emitter {
         }
     }
 
+    /// [`Emitter::eval_environment`] and [`Emitter::pdf_direction`] of an escaped ray's
+    /// direction `d` at once (an envmap finds the direction's place in its map once for both).
+    #[inline]
+    pub fn eval_environment_pdf(&self, d: Vec3) -> (Spectrum, f32) {
+        match self {
+            Emitter::Constant(e) => (e.radiance, ConstantLight::pdf_direction()),
+            Emitter::Envmap(e) => e.eval_pdf(d),
+            _ => (Spectrum::ZERO, 0.0),
+        }
+    }
+
     /// Solid-angle density with which [`Emitter::sample_direction`] (for the light primitive
     /// that `si` lies on) returns the direction from `ref_p` to the hit `si` (area emitters) or
     /// the escaped direction `d` (environments). 0 for delta lights.

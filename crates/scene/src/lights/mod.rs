@@ -347,4 +347,16 @@ impl Scene {
         }
         pmf * self.emitters[emitter as usize].pdf_direction(&self.shapes, ctx.p, si, d)
     }
+
+    /// [`Scene::pdf_emitter_direction`] of the environment `env` along an escaped ray, given
+    /// the emitter's own density `pdf_direction` of that direction
+    /// ([`crate::Emitter::eval_environment_pdf`]).
+    #[inline]
+    pub fn pdf_environment(&self, ctx: &LightContext, env: u32, pdf_direction: f32) -> f32 {
+        let pmf = self.lights.pmf(ctx, self.lights.prim_index(env, 0));
+        if pmf == 0.0 {
+            return 0.0;
+        }
+        pmf * pdf_direction
+    }
 }

@@ -717,7 +717,7 @@ fn envmap_mis_compensation_is_consistent() {
     for e in [&plain, &compensated] {
         let integral = integral_of_pdf(e, 1000);
         assert!((integral - 1.0).abs() < 1e-3, "∫ pdf = {integral}");
-        let mut mismatched = 0;
+        let mut worst = 0.0f32;
         for k in 0..100_000u32 {
             let u = Vec2::new(
                 ((k as u64 * 2654435761) % 1_000_003) as f32 / 1_000_003.0,
@@ -726,11 +726,9 @@ fn envmap_mis_compensation_is_consistent() {
             let es = e.sample_direction(&[], Vec3::ZERO, 0, u).unwrap();
             assert!(es.pdf > 0.0);
             let pdf = e.pdf_direction(&[], Vec3::ZERO, None, es.d);
-            // The sampler evaluates its density at the direction it returns, as
-            // pdf_direction does.
-            if pdf != es.pdf {
-                mismatched += 1;
-            }
+            // The sampler returns its density at the point it drew; pdf_direction finds
+            // that point again from the direction, up to the direction's round-off.
+            worst = worst.max((pdf - es.pdf).abs() / es.pdf);
             // Equal up to the round-off of the direction (steep near the sun's texels).
             let l = e.eval_environment(es.d);
             let tolerance = 1e-3 * (es.radiance.max_element() + 1.0);
@@ -740,10 +738,14 @@ fn envmap_mis_compensation_is_consistent() {
                 es.radiance
             );
         }
-        assert_eq!(
-            mismatched, 0,
-            "{mismatched} of 100000 samples disagree with pdf_direction"
+        // Measured: 6.8e-5 on the plain map, 1.04e-4 on the compensated one, whose weights
+        // drop to zero within a cell, at directions one ulp-scale step from a row border.
+        // A wrong factor or a wrong cell would be off by far more than 1e-3.
+        assert!(
+            worst < 1e-3,
+            "a sample's pdf differs from pdf_direction by {worst} (relative)"
         );
+        eprintln!("largest relative difference of a sample's pdf from pdf_direction: {worst}");
     }
     // Below-average directions are never sampled once compensated (the horizon band is dark).
     let dark = Vec3::new(1.0, -0.6, 0.3).normalize();
