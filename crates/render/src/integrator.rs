@@ -8,12 +8,23 @@ use radia_math::{Ray, Spectrum};
 use radia_sampling::{SampleStream, Sampler};
 use radia_scene::Scene;
 
-/// One camera sample: its film position in pixels, its ray, and its sample stream (past the
-/// film's dimensions).
+/// One camera sample: its film position in pixels and as a fraction of the film (what the
+/// camera makes its ray from, [`CameraSample::ray`]), and its sample stream (past the film's
+/// dimensions).
 pub(crate) struct CameraSample<'a, S> {
     pub pos: Vec2,
-    pub ray: Ray,
+    pub film: Vec2,
     pub stream: SampleStream<'a, S>,
+}
+
+impl<S> CameraSample<'_, S> {
+    /// The camera ray of the sample. (Made by the caller rather than with the sample: the
+    /// packet loop makes the rays of all the lanes it refills together, where their chains
+    /// of square roots and divisions overlap.)
+    #[inline(always)]
+    pub fn ray(&self, scene: &Scene) -> Ray {
+        scene.camera.generate_ray(self.film)
+    }
 }
 
 pub(crate) trait Integrator: Sync {
@@ -39,10 +50,8 @@ pub(crate) trait Integrator: Sync {
         stats: &mut PathStats,
     ) {
         for (o, mut cs) in out.iter_mut().zip(samples) {
-            *o = (
-                cs.pos,
-                self.li(scene, cs.ray, cs.pos, &mut cs.stream, stats),
-            );
+            let ray = cs.ray(scene);
+            *o = (cs.pos, self.li(scene, ray, cs.pos, &mut cs.stream, stats));
         }
     }
 }

@@ -349,6 +349,29 @@ pub(crate) struct PathState {
     prev: PrevVertex,
 }
 
+impl PathState {
+    /// A placeholder for a lane whose camera ray is still to be made
+    /// ([`PathIntegrator::start`] replaces it).
+    pub(crate) const UNSTARTED: Self = Self {
+        ray: Ray {
+            o: Vec3::ZERO,
+            d: Vec3::Z,
+            t_max: 0.0,
+        },
+        result: Spectrum::ZERO,
+        beta: Spectrum::ZERO,
+        eta: 1.0,
+        depth: 0,
+        primary: true,
+        prev: PrevVertex {
+            p: Vec3::ZERO,
+            n: Vec3::ZERO,
+            bsdf_pdf: 1.0,
+            bsdf_delta: true,
+        },
+    };
+}
+
 /// A next-event estimate waiting for its shadow ray.
 #[derive(Clone, Copy)]
 pub(crate) struct PendingShadow {

@@ -355,9 +355,8 @@ impl<'a, S: Sampler> Iterator for TileSamples<'a, S> {
         let mut stream = SampleStream::new(self.sampler, self.key, self.s);
         stream.seek(layout::FILM);
         let pos = Vec2::new(x as f32, y as f32) + stream.next_2d();
-        let film = &self.scene.film;
-        let ray = (self.scene.camera)
-            .generate_ray(pos / Vec2::new(film.width as f32, film.height as f32));
+        let size = &self.scene.film;
+        let film = pos / Vec2::new(size.width as f32, size.height as f32);
         self.s += 1;
         if self.s == self.spp.end {
             self.s = self.spp.start;
@@ -368,7 +367,7 @@ impl<'a, S: Sampler> Iterator for TileSamples<'a, S> {
             }
             self.key = PixelKey::new(self.seed, UVec2::new(self.x, self.y));
         }
-        Some(CameraSample { pos, ray, stream })
+        Some(CameraSample { pos, film, stream })
     }
 }
 
@@ -430,15 +429,12 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
                     TileSamples::new(scene, sampler, seed, (x0, y0), (tw, th), spp_start..spp_end);
                 if E::PER_SAMPLE {
                     // One sample at a time, with its extras beside it.
-                    for CameraSample {
-                        pos,
-                        ray,
-                        mut stream,
-                    } in samples
-                    {
+                    for mut cs in samples {
+                        let (pos, ray) = (cs.pos, cs.ray(scene));
+                        let stream = &mut cs.stream;
                         extras.add(scene, &mut tile_extras, pos, &ray);
                         let l = if extras.beauty() {
-                            integrator.li(scene, ray, pos, &mut stream, &mut pstats)
+                            integrator.li(scene, ray, pos, stream, &mut pstats)
                         } else {
                             Spectrum::ZERO
                         };
