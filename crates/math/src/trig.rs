@@ -91,12 +91,16 @@ pub fn sin_cos_small(a: f32) -> (f32, f32) {
 pub fn sin_cos_turns(u: f32) -> (f32, f32) {
     let q = (4.0 * u).round();
     let (s, c) = sin_cos_small((4.0 * u - q) * FRAC_PI_2);
-    match (q as i64).rem_euclid(4) {
-        0 => (s, c),
-        1 => (c, -s),
-        2 => (-s, -c),
-        _ => (-c, s),
-    }
+    // Quarter turns 0..3: (s, c), (c, −s), (−s, −c), (−c, s), as a swap and two sign flips
+    // rather than a four-way branch on a random quadrant.
+    let quarter = (q as i64).rem_euclid(4) as u32;
+    let (a, b) = std::hint::select_unpredictable(quarter & 1 != 0, (c, s), (s, c));
+    let sin_sign = (quarter >> 1) << 31;
+    let cos_sign = ((quarter ^ (quarter >> 1)) & 1) << 31;
+    (
+        f32::from_bits(a.to_bits() ^ sin_sign),
+        f32::from_bits(b.to_bits() ^ cos_sign),
+    )
 }
 
 #[cfg(test)]
