@@ -10,14 +10,16 @@
 use glam::{Vec2, Vec3};
 use radia_formats::load_mitsuba_xml;
 use radia_scene::Scene;
-use std::path::PathBuf;
 
-fn write_scene(name: &str, body: &str) -> PathBuf {
+/// The scene `body`, written to a temporary file (removed once read) and loaded.
+fn load_scene(name: &str, body: &str) -> Scene {
     let dir = std::env::temp_dir().join(format!("radia-camera-test-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("scene.xml");
     std::fs::write(&path, body).unwrap();
-    path
+    let loaded = load_mitsuba_xml(&path, &[]);
+    let _ = std::fs::remove_dir_all(&dir);
+    Scene::build(loaded.unwrap())
 }
 
 fn assert_close(a: Vec3, b: Vec3, what: &str) {
@@ -29,7 +31,7 @@ fn lookat_camera_rays_match_hand_computed() {
     // Camera at (1, 2, 3) looking at (1, 2, 0): dir = −z; left = up × dir = y × (−z) = −x;
     // up' = dir × left = (−z) × (−x) = +y. fov 90° along x on a 200×100 film:
     // tan(45°) = 1 horizontally, 0.5 vertically.
-    let path = write_scene(
+    let scene = load_scene(
         "lookat",
         r#"<scene version="3.0.0">
             <sensor type="perspective">
@@ -46,7 +48,6 @@ fn lookat_camera_rays_match_hand_computed() {
             </sensor>
         </scene>"#,
     );
-    let scene = Scene::build(load_mitsuba_xml(&path, &[]).unwrap());
     let cam = &scene.camera;
     let eye = Vec3::new(1.0, 2.0, 3.0);
     assert_eq!(
@@ -89,7 +90,7 @@ fn composed_transform_and_fov_axis_y() {
     // rotate 90° about y then translate: M = T · R. Local +z (the view direction) goes to
     // R·z = (1, 0, 0)·sin + ... : rotating +z by 90° about +y gives +x.
     // fov 60° along y on a 100×50 film: tan_y = tan 30°, tan_x = 2 tan 30°.
-    let path = write_scene(
+    let scene = load_scene(
         "composed",
         r#"<scene version="3.0.0">
             <default name="fovy" value="60"/>
@@ -108,7 +109,6 @@ fn composed_transform_and_fov_axis_y() {
             </sensor>
         </scene>"#,
     );
-    let scene = Scene::build(load_mitsuba_xml(&path, &[]).unwrap());
     let cam = &scene.camera;
     let r = cam.generate_ray(Vec2::new(0.5, 0.5));
     assert_close(r.d, Vec3::X, "view direction after rotation");

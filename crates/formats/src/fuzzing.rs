@@ -36,7 +36,7 @@ pub fn gltf(data: &[u8]) {
     if let Ok((desc, _)) = load_gltf_with_warnings(&path, &options) {
         let _ = Scene::build(desc);
     }
-    let _ = std::fs::remove_file(&path);
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A Mitsuba XML scene from its text, built into a [`Scene`] if it loads. File reads are

@@ -6,11 +6,13 @@ use radia_formats::load_mitsuba_xml_with_warnings;
 use radia_scene::SceneDescription;
 
 fn load(xml: &str, name: &str) -> SceneDescription {
-    let dir = std::env::temp_dir().join(format!("radia-fingerprint-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("radia-fingerprint-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(name);
     std::fs::write(&path, xml).unwrap();
-    load_mitsuba_xml_with_warnings(&path, &[]).unwrap().0
+    let loaded = load_mitsuba_xml_with_warnings(&path, &[]);
+    let _ = std::fs::remove_dir_all(&dir);
+    loaded.unwrap().0
 }
 
 const SCENE: &str = r#"<scene version="3.0.0">

@@ -15,7 +15,7 @@ fn gltf_scene(name: &str) -> PathBuf {
 /// `body` in a scene with the camera at the origin (so that render space is the file's world
 /// space), an 8×8 film and a constant environment, written to a fresh file `name`.
 fn write_scene(name: &str, body: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("radia-gltf-shape-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("radia-gltf-shape-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(name);
     let xml = format!(
@@ -43,7 +43,16 @@ fn load_xml(model: &Path, to_world: &str) -> (SceneDescription, Vec<String>) {
         model.display()
     );
     let path = write_scene(&format!("scene-{}.xml", to_world.len()), &body);
-    load_mitsuba_xml_with_warnings(&path, &[]).unwrap_or_else(|e| panic!("{e}"))
+    let loaded = load_mitsuba_xml_with_warnings(&path, &[]);
+    remove_folder_of(&path);
+    loaded.unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Removes the temporary folder [`write_scene`] made for `path`, once the scene is loaded.
+fn remove_folder_of(path: &std::path::Path) {
+    if let Some(dir) = path.parent() {
+        let _ = std::fs::remove_dir_all(dir);
+    }
 }
 
 fn meshes(desc: &SceneDescription) -> Vec<&Mesh> {
@@ -139,7 +148,9 @@ fn a_gltf_shape_in_a_shapegroup_is_instanced_with_all_its_surfaces() {
         model.display()
     );
     let path = write_scene("group.xml", &body);
-    let (desc, _) = load_mitsuba_xml_with_warnings(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+    let loaded = load_mitsuba_xml_with_warnings(&path, &[]);
+    remove_folder_of(&path);
+    let (desc, _) = loaded.unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(desc.shape_groups.len(), 1);
     let group = &desc.shape_groups[0];
     assert_eq!(group.len(), direct.shapes.len());
@@ -183,9 +194,9 @@ fn an_emissive_gltf_file_in_a_shapegroup_is_refused_as_an_instanced_emitter() {
         model.display()
     );
     std::fs::write(&path, xml).unwrap();
-    let err = load_mitsuba_xml_with_warnings(&path, &[])
-        .expect_err("an instanced emitter")
-        .to_string();
+    let loaded = load_mitsuba_xml_with_warnings(&path, &[]);
+    remove_folder_of(&path);
+    let err = loaded.expect_err("an instanced emitter").to_string();
     assert!(
         err.contains("emissive-group.xml:3:9") && err.contains("instancing of emitters"),
         "{err}"

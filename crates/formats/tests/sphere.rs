@@ -12,7 +12,7 @@ use std::f64::consts::PI;
 /// A scene with the camera at the origin (render space is the file's world space) and one
 /// sphere with the `to_world` given as XML.
 fn load(name: &str, to_world: &str) -> (Scene, Vec<String>) {
-    let dir = std::env::temp_dir().join(format!("radia-sphere-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("radia-sphere-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(format!("{name}.xml"));
     let xml = format!(
@@ -29,8 +29,9 @@ fn load(name: &str, to_world: &str) -> (Scene, Vec<String>) {
 "#
     );
     std::fs::write(&path, xml).unwrap();
-    let (desc, warnings) =
-        load_mitsuba_xml_with_warnings(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+    let loaded = load_mitsuba_xml_with_warnings(&path, &[]);
+    let _ = std::fs::remove_dir_all(&dir);
+    let (desc, warnings) = loaded.unwrap_or_else(|e| panic!("{e}"));
     (Scene::build(desc), warnings)
 }
 

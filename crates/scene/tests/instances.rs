@@ -288,11 +288,14 @@ fn scene_xml(body: &str) -> String {
 fn load(xml: &str, name: &str) -> Scene {
     let meshes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/meshes");
     let xml = xml.replace("MESHES", &meshes.display().to_string());
-    let dir = std::env::temp_dir().join(format!("radia-instances-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("radia-instances-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(name);
     std::fs::write(&path, xml).unwrap();
-    Scene::build(load_mitsuba_xml(&path, &[]).unwrap_or_else(|e| panic!("{e}")))
+    let loaded = load_mitsuba_xml(&path, &[]);
+    // The description holds everything it read: the folder can go.
+    let _ = std::fs::remove_dir_all(&dir);
+    Scene::build(loaded.unwrap_or_else(|e| panic!("{e}")))
 }
 
 #[test]
@@ -480,7 +483,9 @@ fn shape_group_to_world_is_ignored_with_a_warning() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("warn.xml");
     std::fs::write(&path, xml).unwrap();
-    let (desc, warnings) = radia_formats::load_mitsuba_xml_with_warnings(&path, &[]).unwrap();
+    let loaded = radia_formats::load_mitsuba_xml_with_warnings(&path, &[]);
+    let _ = std::fs::remove_dir_all(&dir);
+    let (desc, warnings) = loaded.unwrap();
     assert!(
         warnings
             .iter()

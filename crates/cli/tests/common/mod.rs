@@ -15,11 +15,34 @@ pub fn radia(args: &[&str]) -> Output {
 }
 
 /// A fresh folder for one test (named after it and this process, so that tests running at
-/// once do not share files).
-pub fn temp_dir(name: &str) -> PathBuf {
+/// once do not share files), removed with everything in it when the test is done with it.
+pub fn temp_dir(name: &str) -> TempDir {
     let dir = std::env::temp_dir().join(format!("radia-cli-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    dir
+    TempDir(dir)
+}
+
+/// A folder that is deleted when dropped (a test's, so its files do not pile up in /tmp).
+pub struct TempDir(PathBuf);
+
+impl std::ops::Deref for TempDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for TempDir {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        // Best effort: a test that failed may still hold a file open on some systems.
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
 }
 
 /// Writes `xml` as `dir/scene.xml` and returns its path.

@@ -862,13 +862,15 @@ mod tests {
 <shape type="sphere">{bsdf}</shape>
 </scene>"#
         );
-        let dir = std::env::temp_dir().join(format!("radia-bsdf-loader-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        // A folder per call (tests run on several threads), removed once loaded.
         let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let path = dir.join(format!("t{n}.xml"));
+        let dir =
+            std::env::temp_dir().join(format!("radia-bsdf-loader-{}-{n}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("scene.xml");
         std::fs::write(&path, xml).unwrap();
         let r = load_mitsuba_xml_with_warnings(&path, &[]).map_err(|e| e.to_string());
-        let _ = std::fs::remove_file(&path);
+        let _ = std::fs::remove_dir_all(&dir);
         r
     }
 

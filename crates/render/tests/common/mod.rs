@@ -6,17 +6,38 @@ use radia_formats::load_mitsuba_xml;
 use radia_render::{render, RenderOptions, RenderOutput};
 use radia_sampling::SamplerKind;
 use radia_scene::Scene;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 /// Writes `xml` as `scene.xml` in a fresh temporary folder named after `name` (so the
-/// tests of one binary, running at once, do not share files) and returns its path.
-pub fn write_scene(name: &str, xml: &str) -> PathBuf {
+/// tests of one binary, running at once, do not share files); the folder goes when the
+/// returned file does.
+pub fn write_scene(name: &str, xml: &str) -> SceneFile {
     let dir = std::env::temp_dir().join(format!("radia-render-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("scene.xml");
     std::fs::write(&path, xml).unwrap();
-    path
+    SceneFile { dir, path }
+}
+
+/// A scene file in a temporary folder of its own, deleted with the folder when dropped (so
+/// the tests' files do not pile up in /tmp).
+pub struct SceneFile {
+    dir: PathBuf,
+    path: PathBuf,
+}
+
+impl std::ops::Deref for SceneFile {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for SceneFile {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
 }
 
 /// Loads `xml` and renders it with the independent sampler at `spp` and `seed`.
