@@ -86,8 +86,9 @@ impl LightBounds {
     }
 }
 
-/// [`LightBounds`] as the walk down the tree reads them, at two nodes per level: the
-/// bounding sphere and the sines and cosines of the cone, computed once at build time.
+/// [`LightBounds`] in the terms of the importance: the bounding sphere and the sines and
+/// cosines of the cone, computed once at build time and laid out in lanes by
+/// [`ChildBounds`].
 #[derive(Clone, Copy, Debug)]
 struct NodeBounds {
     center: Vec3,

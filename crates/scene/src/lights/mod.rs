@@ -341,11 +341,9 @@ impl Scene {
         d: Vec3,
     ) -> f32 {
         let face = si.map_or(0, |s| s.face);
-        let pmf = self.lights.pmf(ctx, self.lights.prim_index(emitter, face));
-        if pmf == 0.0 {
-            return 0.0;
-        }
-        pmf * self.emitters[emitter as usize].pdf_direction(&self.shapes, ctx.p, si, d)
+        self.chosen_times(ctx, emitter, face, || {
+            self.emitters[emitter as usize].pdf_direction(&self.shapes, ctx.p, si, d)
+        })
     }
 
     /// [`Scene::pdf_emitter_direction`] of the environment `env` along an escaped ray, given
@@ -353,10 +351,24 @@ impl Scene {
     /// ([`crate::Emitter::eval_environment_pdf`]).
     #[inline]
     pub fn pdf_environment(&self, ctx: &LightContext, env: u32, pdf_direction: f32) -> f32 {
-        let pmf = self.lights.pmf(ctx, self.lights.prim_index(env, 0));
+        self.chosen_times(ctx, env, 0, || pdf_direction)
+    }
+
+    /// The probability that light selection from `ctx` picks light primitive `face` of
+    /// `emitter`, times the emitter's own density (asked for only when that probability is
+    /// not 0).
+    #[inline(always)]
+    fn chosen_times(
+        &self,
+        ctx: &LightContext,
+        emitter: u32,
+        face: u32,
+        pdf_direction: impl FnOnce() -> f32,
+    ) -> f32 {
+        let pmf = self.lights.pmf(ctx, self.lights.prim_index(emitter, face));
         if pmf == 0.0 {
             return 0.0;
         }
-        pmf * pdf_direction
+        pmf * pdf_direction()
     }
 }
