@@ -6,6 +6,7 @@ pub use glam::{self, Affine3A, Mat3, Mat4, UVec2, Vec2, Vec3, Vec3A, Vec4};
 
 pub mod float;
 mod frame;
+pub mod lanes;
 mod ray;
 pub mod trig;
 

@@ -517,6 +517,19 @@ impl Accel {
         self.len() == 0
     }
 
+    /// The shape of primitive `prim` and its face (0 for an analytic shape).
+    #[inline(always)]
+    pub(crate) fn owner(&self, prim: usize) -> [u32; 2] {
+        self.owners[prim]
+    }
+
+    /// Coordinate `axis` of vertex `k` of triangle `prim`, for gathering lanes
+    /// (`3 * k + axis` indexes the nine coordinate arrays; NaN for an analytic primitive).
+    #[inline(always)]
+    pub(crate) fn triangle_coordinate(&self, prim: usize, coordinate: usize) -> f32 {
+        self.lanes.coordinate(prim, coordinate)
+    }
+
     /// Primitive `prim` (BVH order, as in [`Hit::prim`]): its shape and face, a triangle's
     /// vertices from the 8-wide layout, a sphere's centre and radius from its shape.
     #[inline(always)]

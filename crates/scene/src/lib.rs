@@ -18,7 +18,7 @@ pub use camera::{look_at, Camera};
 pub use description::*;
 pub use emitter::{Emitter, EmitterSample};
 pub use lights::{LightContext, LightSamplerKind, Lights};
-use shape::ShapeKind;
+use shape::{MeshHits, ShapeKind};
 pub use shape::{Shape, SurfaceInteraction};
 
 use glam::Vec3;
@@ -155,10 +155,32 @@ impl Scene {
         out: &mut [Option<SurfaceInteraction>; PACKET_LANES],
     ) {
         let hits = self.accel.intersect_packet(&self.shapes, rays);
+        // Hits on mesh triangles are gathered and their interactions computed together
+        // (`shape::MeshHits`); the others, and the lanes it leaves, one by one.
+        let mut meshes = MeshHits::new();
+        let mut one_by_one = 0u32;
         for (lane, si) in out.iter_mut().enumerate() {
-            *si = hits
-                .hit(lane)
-                .map(|hit| self.interaction(&hit, &rays.ray(lane)));
+            *si = None;
+            if hits.hit & (1 << lane) == 0 {
+                continue;
+            }
+            let prim = hits.prim[lane] as usize;
+            let [shape, face] = self.accel.owner(prim);
+            match &self.shapes[shape as usize].kind {
+                ShapeKind::Mesh(mesh) if MeshHits::takes(mesh) => {
+                    meshes.push(lane, mesh, shape, face, |c| {
+                        self.accel.triangle_coordinate(prim, c)
+                    });
+                }
+                _ => one_by_one |= 1 << lane,
+            }
+        }
+        one_by_one |= meshes.interactions(&hits, rays, out);
+        while one_by_one != 0 {
+            let lane = one_by_one.trailing_zeros() as usize;
+            one_by_one &= one_by_one - 1;
+            let hit = hits.hit(lane).expect("a lane with a hit");
+            out[lane] = Some(self.interaction(&hit, &rays.ray(lane)));
         }
     }
 

@@ -2,6 +2,10 @@
 //! hit, and the sampling of points on them that area lights need (by solid angle where it can
 //! be done: spheres seen from outside, triangles of reasonable solid angle; else by area).
 
+mod lanes;
+
+pub(crate) use lanes::MeshHits;
+
 use crate::accel::{Hit, Primitive};
 use crate::description::{Geometry, Mesh};
 use crate::spherical::{sample_spherical_triangle, triangle_solid_angle};

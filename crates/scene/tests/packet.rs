@@ -561,3 +561,192 @@ fn scene_packets_match_scene_intersect() {
         );
     }
 }
+
+/// Every field of a surface interaction, bit for bit (`Debug` of the floats' bits).
+fn interaction_bits(si: &radia_scene::SurfaceInteraction) -> String {
+    let v = |v: Vec3| v.to_array().map(f32::to_bits);
+    format!(
+        "p {:?} err {:?} t {} n {:?} frame {:?} {:?} {:?} uv {:?} dpdu {:?} dpdv {:?} \
+         shape {} instance {:?} face {} wi {:?}",
+        v(si.p),
+        v(si.p_error),
+        si.t.to_bits(),
+        v(si.n),
+        v(si.frame.s),
+        v(si.frame.t),
+        v(si.frame.n),
+        si.uv.to_array().map(f32::to_bits),
+        v(si.dp_du),
+        v(si.dp_dv),
+        si.shape,
+        si.instance,
+        si.face,
+        v(si.wi),
+    )
+}
+
+/// Meshes that take every branch of a triangle's interaction: smooth normals and uvs, flipped
+/// normals, degenerate uv triangles (a basis around the face normal), glTF tangents, shading
+/// normals that vanish (zero vectors: the face normal instead) and a shading normal along
+/// ∂p/∂u (the frame's fallback), beside an analytic sphere.
+fn every_mesh_branch() -> Scene {
+    use radia_bsdf::{Bsdf, Diffuse};
+    use radia_scene::*;
+    let mut rng = Pcg64::seed_from_u64(17);
+    let shape = |mesh: Mesh| ShapeDesc {
+        geometry: Geometry::Mesh(mesh),
+        bsdf: Bsdf::Diffuse(Diffuse::new(Vec3::splat(0.5))),
+        emission: None,
+        origin: "test".into(),
+    };
+    let uv_of = |p: Vec3| Vec2::new(p.x * 0.37 + p.z * 0.1, p.y * 0.51 - p.z * 0.2);
+    // Smooth normals and uvs.
+    let mut smooth = uv_sphere(Vec3::new(-1.0, 0.0, 0.0), 0.8, 24, 32);
+    smooth.normals = Some(
+        smooth
+            .positions
+            .iter()
+            .map(|p| (*p - Vec3::new(-1.0, 0.0, 0.0)).normalize())
+            .collect(),
+    );
+    smooth.uvs = Some(smooth.positions.iter().map(|p| uv_of(*p)).collect());
+    // Flipped, uvs degenerate on every third triangle (one uv for all its corners), and
+    // some vertex normals zero.
+    let mut flipped = soup(&mut rng, 3000, 1.5, 0.4);
+    let mut positions = Vec::new();
+    let mut uvs = Vec::new();
+    let mut normals = Vec::new();
+    for (f, tri) in flipped.indices.iter_mut().enumerate() {
+        for (k, i) in tri.iter_mut().enumerate() {
+            let p = flipped.positions[*i as usize];
+            *i = positions.len() as u32;
+            positions.push(p);
+            uvs.push(if f % 3 == 0 {
+                Vec2::splat(0.25)
+            } else {
+                uv_of(p)
+            });
+            normals.push(if f % 5 == 0 && k == 1 {
+                Vec3::ZERO
+            } else {
+                random_dir(&mut rng)
+            });
+        }
+    }
+    if let Some(n) = normals.get_mut(0..3) {
+        n.fill(Vec3::ZERO);
+    }
+    flipped.positions = positions;
+    flipped.uvs = Some(uvs);
+    flipped.normals = Some(normals);
+    flipped.flip_normals = true;
+    // Tangents (normal-mapped glTF).
+    let mut tangent = uv_sphere(Vec3::new(1.2, 0.3, 0.0), 0.6, 12, 16);
+    tangent.normals = Some(
+        tangent
+            .positions
+            .iter()
+            .map(|p| (*p - Vec3::new(1.2, 0.3, 0.0)).normalize())
+            .collect(),
+    );
+    tangent.tangents = Some(
+        tangent
+            .positions
+            .iter()
+            .map(|p| p.cross(Vec3::Z).normalize_or(Vec3::X).extend(-1.0))
+            .collect(),
+    );
+    // Shading normals along ∂p/∂u (= the first edge without uvs): the frame falls back.
+    let along = Mesh {
+        positions: vec![
+            Vec3::new(-2.0, -2.0, 1.0),
+            Vec3::new(2.0, -2.0, 1.0),
+            Vec3::new(-2.0, 2.0, 1.0),
+        ],
+        normals: Some(vec![Vec3::X; 3]),
+        indices: vec![[0, 1, 2]],
+        ..Default::default()
+    };
+    let sphere = ShapeDesc {
+        geometry: Geometry::sphere(Vec3::new(0.0, 1.2, 0.0), 0.4, false),
+        ..shape(Mesh::default())
+    };
+    Scene::build(SceneDescription {
+        integrator: IntegratorDesc::default(),
+        camera: CameraDesc {
+            to_world: Affine3A::IDENTITY,
+            fov_x_degrees: 45.0,
+            near_clip: 0.01,
+            far_clip: 1e4,
+            principal_point_offset: Vec2::ZERO,
+        },
+        film: FilmDesc::default(),
+        sampler: SamplerDesc::default(),
+        shapes: vec![
+            shape(smooth),
+            shape(flipped),
+            shape(tangent),
+            shape(along),
+            sphere,
+        ],
+        shape_groups: Vec::new(),
+        world_origin: glam::DVec3::ZERO,
+        emitters: Vec::new(),
+        sampling_weights: Default::default(),
+    })
+}
+
+/// The interactions of packet hits, computed sixteen lanes at once for mesh triangles, are
+/// those of single rays in every field, bit for bit, on meshes that take every branch of the
+/// scalar code (and the lanes that take its rare ones are handed back to it).
+#[test]
+fn packet_interactions_match_single_rays_in_every_field() {
+    let scene = every_mesh_branch();
+    let mut rng = Pcg64::seed_from_u64(23);
+    let (mut hits, mut failures) = (0, Vec::new());
+    let mut faces = std::collections::HashSet::new();
+    for k in 0..6000 {
+        let rays: [Ray; PACKET_LANES] = std::array::from_fn(|_| {
+            let o = random_in_cube(&mut rng, 2.5);
+            let d = if k % 2 == 0 {
+                (random_in_cube(&mut rng, 1.0) - o).normalize()
+            } else {
+                random_dir(&mut rng)
+            };
+            Ray::new(o, d, f32::INFINITY)
+        });
+        let active = random_mask(&mut rng) | 1;
+        let p = packet(&rays, active);
+        let mut out = [None; PACKET_LANES];
+        scene.intersect_packet(&p, &mut out);
+        for (l, got) in out.iter().enumerate() {
+            if active & (1 << l) == 0 {
+                continue;
+            }
+            let want = scene.intersect(&rays[l]);
+            let (got, want) = (got.as_ref().map(interaction_bits), want.as_ref());
+            if let Some(si) = want {
+                hits += 1;
+                faces.insert((si.shape, si.face % 3 == 0, si.face % 5 == 0));
+            }
+            if got != want.map(interaction_bits) {
+                failures.push(format!("packet {k} lane {l}: {got:?} vs {want:?}"));
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} disagreements: {:#?}",
+        failures.len(),
+        &failures[..failures.len().min(4)]
+    );
+    // Every mesh, the degenerate-uv and zero-normal triangles among them, and the sphere.
+    for shape in 0..5 {
+        assert!(
+            faces.iter().any(|f| f.0 == shape),
+            "shape {shape} never hit"
+        );
+    }
+    assert!(faces.contains(&(1, true, false)) && faces.contains(&(1, false, true)));
+    assert!(hits > 20_000, "{hits} hits");
+}
