@@ -119,6 +119,78 @@ impl Vec3s {
     }
 }
 
+/// Sixteen 3×3 matrices by column (glam's `Mat3A`).
+#[derive(Clone, Copy, Debug)]
+pub struct Mat3s {
+    pub cols: [Vec3s; 3],
+}
+
+impl Mat3s {
+    /// glam's `Mat3A::mul_vec3`: (c₀·x + c₁·y) + c₂·z per component.
+    #[inline(always)]
+    pub fn mul_vec3(&self, v: Vec3s) -> Vec3s {
+        self.cols[0] * v.x + self.cols[1] * v.y + self.cols[2] * v.z
+    }
+}
+
+/// `crate::trig::atan2` in each lane, and the mask of the lanes it computed: those whose
+/// larger argument magnitude is positive and finite (the others, where the scalar function
+/// defers to the C library, are left to it; their values here are meaningless).
+#[inline(always)]
+pub fn atan2(y: f32x16, x: f32x16) -> (f32x16, f32x16) {
+    use crate::trig::ATAN_Q;
+    use std::f32::consts::{FRAC_PI_2, PI};
+    let (ax, ay) = (x.abs(), y.abs());
+    let swap = ay.simd_gt(ax);
+    let (num, den) = (swap.select(ax, ay), swap.select(ay, ax));
+    let ok = den.simd_gt(f32x16::ZERO) & den.is_finite();
+    let t = num / den;
+    let s = t * t;
+    let mut q = f32x16::splat(ATAN_Q[8]);
+    for &c in ATAN_Q[..8].iter().rev() {
+        q = q.mul_add(s, f32x16::splat(c));
+    }
+    let a = t * q;
+    let a = swap.select(f32x16::splat(FRAC_PI_2) - a, a);
+    let a = x.is_sign_negative().select(f32x16::splat(PI) - a, a);
+    (copysign(a, y), ok)
+}
+
+/// `crate::trig::asin` in each lane (with [`atan2`]'s mask).
+#[inline(always)]
+pub fn asin(x: f32x16) -> (f32x16, f32x16) {
+    atan2(x, ((f32x16::ONE - x) * (f32x16::ONE + x)).sqrt())
+}
+
+/// `crate::unit_angle_z` in each lane (with [`atan2`]'s mask).
+#[inline(always)]
+pub fn unit_angle_z(v: Vec3s) -> (f32x16, f32x16) {
+    use std::f32::consts::PI;
+    let upper = v.z.simd_ge(f32x16::ZERO);
+    let pole = upper.select(f32x16::ONE, -f32x16::ONE);
+    let chord = Vec3s {
+        x: v.x,
+        y: v.y,
+        z: v.z - pole,
+    };
+    let half_chord = f32x16::splat(0.5) * chord.length_squared().sqrt();
+    // f32::min(h, 1): 1 for a NaN h.
+    let (asin, ok) = asin(
+        half_chord
+            .simd_lt(f32x16::ONE)
+            .select(half_chord, f32x16::ONE),
+    );
+    let angle = f32x16::splat(2.0) * asin;
+    (upper.select(angle, f32x16::splat(PI) - angle), ok)
+}
+
+/// The magnitude of `a` with the sign of `b` (`f32::copysign`).
+#[inline(always)]
+pub fn copysign(a: f32x16, b: f32x16) -> f32x16 {
+    let sign = f32x16::splat(-0.0);
+    (a & !sign) | (b & sign)
+}
+
 impl Add for Vec3s {
     type Output = Self;
     #[inline(always)]
@@ -171,6 +243,7 @@ impl Mul<f32x16> for Vec3s {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::trig;
 
     /// Sixteen vectors of assorted scales and signs, with a zero and a huge one.
     fn samples(seed: u32) -> [Vec3; WIDTH] {
@@ -238,6 +311,70 @@ mod tests {
                 );
                 let scalar_finite = (a[k] * (1.0 / a[k].length())).is_finite();
                 assert_eq!(finite & (1 << k) != 0, scalar_finite, "is_finite lane {k}");
+            }
+        }
+    }
+
+    #[test]
+    fn lane_trigonometry_is_the_scalar_functions_bit_for_bit() {
+        let special = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            1e-30,
+            -1e-30,
+            3e38,
+            f32::INFINITY,
+            f32::NAN,
+        ];
+        for seed in 0..256 {
+            let (a, b) = (samples(seed), samples(seed + 5000));
+            let mut y = a.map(|v| v.x);
+            let mut x = b.map(|v| v.y);
+            if seed < special.len() as u32 {
+                y[0] = special[seed as usize];
+                x[1] = special[seed as usize];
+                (x[2], y[2]) = (special[seed as usize], special[(seed as usize + 3) % 9]);
+            }
+            let (got, ok) = atan2(f32x16::new(y), f32x16::new(x));
+            let (got, ok) = (got.to_array(), ok.to_bitmask());
+            // Unit vectors (and one off unit length) for the polar angle, asin on [−1, 1].
+            let mut units = a.map(|v| v.normalize_or(Vec3::Z));
+            units[5] = Vec3::new(0.0, 0.0, -1.0);
+            units[6] *= 1.7;
+            let (theta, theta_ok) = unit_angle_z(pack(&units));
+            let (theta, theta_ok) = (theta.to_array(), theta_ok.to_bitmask());
+            let s = units.map(|v| v.x.clamp(-1.0, 1.0));
+            let (arcsin, asin_ok) = asin(f32x16::new(s));
+            let (arcsin, asin_ok) = (arcsin.to_array(), asin_ok.to_bitmask());
+            for k in 0..WIDTH {
+                let (ax, ay) = (x[k].abs(), y[k].abs());
+                let den = if ay > ax { ay } else { ax };
+                assert_eq!(
+                    ok & (1 << k) != 0,
+                    den > 0.0 && den.is_finite(),
+                    "{x:?} {y:?}"
+                );
+                if ok & (1 << k) != 0 {
+                    let want = trig::atan2(y[k], x[k]);
+                    assert_eq!(
+                        got[k].to_bits(),
+                        want.to_bits(),
+                        "atan2({}, {})",
+                        y[k],
+                        x[k]
+                    );
+                }
+                assert!(theta_ok & (1 << k) != 0 && asin_ok & (1 << k) != 0);
+                let want = crate::unit_angle_z(units[k]);
+                assert_eq!(theta[k].to_bits(), want.to_bits(), "θ of {}", units[k]);
+                assert_eq!(
+                    arcsin[k].to_bits(),
+                    trig::asin(s[k]).to_bits(),
+                    "asin {}",
+                    s[k]
+                );
             }
         }
     }

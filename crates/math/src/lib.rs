@@ -42,7 +42,7 @@ pub fn safe_sqrt(x: f32) -> f32 {
 pub fn unit_angle_z(v: Vec3) -> f32 {
     let pole = if v.z >= 0.0 { 1.0 } else { -1.0 };
     let half_chord = 0.5 * Vec3::new(v.x, v.y, v.z - pole).length();
-    let angle = 2.0 * half_chord.min(1.0).asin();
+    let angle = 2.0 * trig::asin(half_chord.min(1.0));
     if v.z >= 0.0 {
         angle
     } else {

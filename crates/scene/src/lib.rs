@@ -18,7 +18,7 @@ pub use camera::{look_at, Camera};
 pub use description::*;
 pub use emitter::{Emitter, EmitterSample};
 pub use lights::{LightContext, LightSamplerKind, Lights};
-use shape::{MeshHits, ShapeKind};
+use shape::{MeshHits, ShapeKind, SphereHits};
 pub use shape::{Shape, SurfaceInteraction};
 
 use glam::Vec3;
@@ -155,9 +155,11 @@ impl Scene {
         out: &mut [Option<SurfaceInteraction>; PACKET_LANES],
     ) {
         let hits = self.accel.intersect_packet(&self.shapes, rays);
-        // Hits on mesh triangles are gathered and their interactions computed together
-        // (`shape::MeshHits`); the others, and the lanes it leaves, one by one.
+        // Hits on mesh triangles and on spheres are gathered and their interactions computed
+        // together (`shape::MeshHits`, `shape::SphereHits`); the others, and the lanes those
+        // hand back, one by one.
         let mut meshes = MeshHits::new();
+        let mut spheres = SphereHits::new();
         let mut one_by_one = 0u32;
         for (lane, si) in out.iter_mut().enumerate() {
             *si = None;
@@ -172,10 +174,12 @@ impl Scene {
                         self.accel.triangle_coordinate(prim, c)
                     });
                 }
+                kind @ ShapeKind::Sphere { .. } => spheres.push(lane, shape, kind),
                 _ => one_by_one |= 1 << lane,
             }
         }
         one_by_one |= meshes.interactions(&hits, rays, out);
+        one_by_one |= spheres.interactions(&hits, rays, out);
         while one_by_one != 0 {
             let lane = one_by_one.trailing_zeros() as usize;
             one_by_one &= one_by_one - 1;

@@ -588,7 +588,8 @@ fn interaction_bits(si: &radia_scene::SurfaceInteraction) -> String {
 /// Meshes that take every branch of a triangle's interaction: smooth normals and uvs, flipped
 /// normals, degenerate uv triangles (a basis around the face normal), glTF tangents, shading
 /// normals that vanish (zero vectors: the face normal instead) and a shading normal along
-/// ∂p/∂u (the frame's fallback), beside an analytic sphere.
+/// ∂p/∂u (the frame's fallback), beside two analytic spheres, one flipped, rotated and
+/// scaled unevenly.
 fn every_mesh_branch() -> Scene {
     use radia_bsdf::{Bsdf, Diffuse};
     use radia_scene::*;
@@ -671,6 +672,17 @@ fn every_mesh_branch() -> Scene {
         geometry: Geometry::sphere(Vec3::new(0.0, 1.2, 0.0), 0.4, false),
         ..shape(Mesh::default())
     };
+    // Flipped, rotated and scaled unevenly (uv and tangents follow the transform).
+    let turned = ShapeDesc {
+        geometry: Geometry::Sphere {
+            center: Vec3::new(0.3, -1.3, 0.5),
+            radius: 0.5,
+            to_world: glam::Mat3A::from_quat(Quat::from_rotation_x(0.7))
+                * glam::Mat3A::from_diagonal(Vec3::new(0.5, 0.8, 0.3)),
+            flip_normals: true,
+        },
+        ..shape(Mesh::default())
+    };
     Scene::build(SceneDescription {
         integrator: IntegratorDesc::default(),
         camera: CameraDesc {
@@ -688,6 +700,7 @@ fn every_mesh_branch() -> Scene {
             shape(tangent),
             shape(along),
             sphere,
+            turned,
         ],
         shape_groups: Vec::new(),
         world_origin: glam::DVec3::ZERO,
@@ -696,7 +709,8 @@ fn every_mesh_branch() -> Scene {
     })
 }
 
-/// The interactions of packet hits, computed sixteen lanes at once for mesh triangles, are
+/// The interactions of packet hits, computed sixteen lanes at once for mesh triangles and
+/// spheres, are
 /// those of single rays in every field, bit for bit, on meshes that take every branch of the
 /// scalar code (and the lanes that take its rare ones are handed back to it).
 #[test]
@@ -741,7 +755,7 @@ fn packet_interactions_match_single_rays_in_every_field() {
         &failures[..failures.len().min(4)]
     );
     // Every mesh, the degenerate-uv and zero-normal triangles among them, and the sphere.
-    for shape in 0..5 {
+    for shape in 0..6 {
         assert!(
             faces.iter().any(|f| f.0 == shape),
             "shape {shape} never hit"

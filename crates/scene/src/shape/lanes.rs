@@ -1,4 +1,4 @@
-//! The surface interactions of a packet's hits on mesh triangles, sixteen at once.
+//! The surface interactions of a packet's hits on mesh triangles and spheres, sixteen at once.
 //!
 //! [`Shape::interaction`](super::Shape::interaction) computed one lane after another is a
 //! chain of three square roots and three divisions per hit, which a core runs one lane at a
@@ -8,16 +8,17 @@
 //! so every lane holds bit for bit what `Shape::interaction` gives.
 //!
 //! Lanes that would take a rare branch of the scalar code (tangent frames of normal-mapped
-//! glTF meshes, a degenerate uv triangle, a shading frame whose tangent vanishes) are left
-//! to it: [`MeshHits::interactions`] returns them.
+//! glTF meshes, a degenerate uv triangle, a shading frame whose tangent vanishes, a sphere's
+//! pole, where its atan2 defers to the C library) are left to it: the `interactions` methods
+//! return them.
 
 use crate::description::Mesh;
 use crate::shape::SurfaceInteraction;
 use crate::{PacketHits, RayPacket, PACKET_LANES};
 use glam::{Vec2, Vec3};
 use radia_math::float::gamma;
-use radia_math::lanes::{f32x16, Vec3s, WIDTH};
-use radia_math::Frame;
+use radia_math::lanes::{self, f32x16, Mat3s, Vec3s, WIDTH};
+use radia_math::{Frame, INV_TWO_PI, PI};
 
 const _: () = assert!(WIDTH == PACKET_LANES);
 
@@ -118,11 +119,9 @@ impl MeshHits {
         rays: &RayPacket,
         out: &mut [Option<SurfaceInteraction>; PACKET_LANES],
     ) -> u32 {
-        let mask = |bits: u32| {
-            f32x16::new(std::array::from_fn(|k| {
-                f32::from_bits(if bits & (1 << k) != 0 { u32::MAX } else { 0 })
-            }))
-        };
+        if self.lanes == 0 {
+            return 0;
+        }
         let v = self.v.map(|rows| Vec3s::from_rows(&rows));
         let b1 = f32x16::new(hits.bary.map(|b| b.x));
         let b2 = f32x16::new(hits.bary.map(|b| b.y));
@@ -169,6 +168,186 @@ impl MeshHits {
         let dpdu = Vec3s::select(with_uvs, dpdu_uv, dp0);
         let dpdv = Vec3s::select(with_uvs, dpdv_uv, dp1);
 
+        let surface = Surface {
+            p,
+            p_error,
+            n,
+            sh_n,
+            dpdu,
+            dpdv,
+            uv: (uv_u, uv_v),
+        };
+        let scalar = self.lanes & degenerate_uv.to_bitmask();
+        scalar
+            | surface.write(
+                self.lanes & !scalar,
+                hits,
+                rays,
+                &self.shape,
+                &self.face,
+                out,
+            )
+    }
+}
+
+/// The packet's hits on spheres, gathered lane by lane ([`SphereHits::push`]).
+pub(crate) struct SphereHits {
+    lanes: u32,
+    center: Rows,
+    radius: [f32; WIDTH],
+    /// The linear parts of the spheres' transforms, `[column][axis][lane]`.
+    to_world: [Rows; 3],
+    to_object: [Rows; 3],
+    flipped: u32,
+    shape: [u32; WIDTH],
+}
+
+impl SphereHits {
+    pub(crate) fn new() -> Self {
+        Self {
+            lanes: 0,
+            center: [[0.0; WIDTH]; 3],
+            radius: [0.0; WIDTH],
+            to_world: [[[0.0; WIDTH]; 3]; 3],
+            to_object: [[[0.0; WIDTH]; 3]; 3],
+            flipped: 0,
+            shape: [0; WIDTH],
+        }
+    }
+
+    /// Lane `lane` hit sphere `shape` (whose kind must be `ShapeKind::Sphere`).
+    #[inline(always)]
+    pub(crate) fn push(&mut self, lane: usize, shape: u32, kind: &super::ShapeKind) {
+        let super::ShapeKind::Sphere {
+            center,
+            radius,
+            to_world,
+            to_object,
+            flip_normals,
+        } = kind
+        else {
+            unreachable!("SphereHits::push takes spheres");
+        };
+        self.lanes |= 1 << lane;
+        self.shape[lane] = shape;
+        self.radius[lane] = *radius;
+        for axis in 0..3 {
+            self.center[axis][lane] = center[axis];
+            for col in 0..3 {
+                self.to_world[col][axis][lane] = to_world.col(col)[axis];
+                self.to_object[col][axis][lane] = to_object.col(col)[axis];
+            }
+        }
+        if *flip_normals {
+            self.flipped |= 1 << lane;
+        }
+    }
+
+    /// As [`MeshHits::interactions`], for the spheres (the sphere branch of
+    /// `Shape::interaction`, with `sphere_point_error`, `sphere_tangents` and `sphere_uv`).
+    #[inline(always)]
+    pub(crate) fn interactions(
+        &self,
+        hits: &PacketHits,
+        rays: &RayPacket,
+        out: &mut [Option<SurfaceInteraction>; PACKET_LANES],
+    ) -> u32 {
+        if self.lanes == 0 {
+            return 0;
+        }
+        let center = Vec3s::from_rows(&self.center);
+        let radius = f32x16::new(self.radius);
+        let matrix = |m: &[Rows; 3]| Mat3s {
+            cols: m.map(|c| Vec3s::from_rows(&c)),
+        };
+        let (to_world, to_object) = (matrix(&self.to_world), matrix(&self.to_object));
+        let (o, d) = (Vec3s::from_rows(&rays.o), Vec3s::from_rows(&rays.d));
+        let t = f32x16::new(hits.t);
+
+        // The hit point, reprojected onto the surface.
+        let offset = (o + d * t) - center;
+        let offset = offset * (radius / offset.length_squared().sqrt());
+        let p = center + offset;
+        let p_error = offset.abs() * f32x16::splat(gamma(8))
+            + (center + offset).abs() * f32x16::splat(gamma(1));
+        let n = offset.div(radius);
+        let n = Vec3s::select(mask(self.flipped), -n, n);
+
+        // ∂p/∂u, ∂p/∂v and uv from the point in object space (Mitsuba's sphere.cpp).
+        let local = to_object.mul_vec3(offset);
+        let two_pi = f32x16::splat(2.0 * PI);
+        let dpdu = Vec3s {
+            x: -local.y * two_pi,
+            y: local.x * two_pi,
+            z: f32x16::ZERO * two_pi,
+        };
+        let rxy = (local.x * local.x + local.y * local.y).sqrt();
+        let pi = f32x16::splat(PI);
+        let off_pole = rxy.simd_gt(f32x16::ZERO);
+        let dpdv = Vec3s::select(
+            off_pole,
+            Vec3s {
+                x: local.z * local.x / rxy,
+                y: local.z * local.y / rxy,
+                z: -rxy,
+            } * pi,
+            Vec3s::splat(Vec3::new(PI, 0.0, 0.0)),
+        );
+        let (dpdu, dpdv) = (to_world.mul_vec3(dpdu), to_world.mul_vec3(dpdv));
+        let (phi, phi_ok) = lanes::atan2(local.y, local.x);
+        let u = phi * f32x16::splat(INV_TWO_PI);
+        let u = u.simd_lt(f32x16::ZERO).select(u + f32x16::ONE, u);
+        let (theta, theta_ok) = lanes::unit_angle_z(local);
+        let surface = Surface {
+            p,
+            p_error,
+            n,
+            sh_n: n,
+            dpdu,
+            dpdv,
+            uv: (u, theta / pi),
+        };
+        let scalar = self.lanes & !(phi_ok & theta_ok).to_bitmask();
+        let faces = [0; WIDTH];
+        scalar | surface.write(self.lanes & !scalar, hits, rays, &self.shape, &faces, out)
+    }
+}
+
+/// A mask with the lanes of `bits` set.
+#[inline(always)]
+fn mask(bits: u32) -> f32x16 {
+    f32x16::new(std::array::from_fn(|k| {
+        f32::from_bits(if bits & (1 << k) != 0 { u32::MAX } else { 0 })
+    }))
+}
+
+/// The geometry of sixteen hits, up to their shading frames.
+struct Surface {
+    p: Vec3s,
+    p_error: Vec3s,
+    /// Geometric and shading normals (flipped where the shape says so).
+    n: Vec3s,
+    sh_n: Vec3s,
+    dpdu: Vec3s,
+    dpdv: Vec3s,
+    uv: (f32x16, f32x16),
+}
+
+impl Surface {
+    /// Completes the interactions of `lanes` (their shading frames and incoming directions)
+    /// into `out`, except where the frame's tangent vanishes: those lanes, whose `out` is
+    /// untouched, are returned.
+    #[inline(always)]
+    fn write(
+        &self,
+        lanes: u32,
+        hits: &PacketHits,
+        rays: &RayPacket,
+        shape: &[u32; WIDTH],
+        face: &[u32; WIDTH],
+        out: &mut [Option<SurfaceInteraction>; PACKET_LANES],
+    ) -> u32 {
+        let (sh_n, dpdu) = (self.sh_n, self.dpdu);
         // The shading frame: ∂p/∂u made orthogonal to the shading normal
         // (`Frame::try_from_normal_tangent`); where it vanishes, the scalar code's fallback.
         let s = dpdu - sh_n * sh_n.dot(dpdu);
@@ -178,21 +357,20 @@ impl MeshHits {
         let t_axis = sh_n.cross(s);
 
         // The incoming direction in the shading frame.
-        let d = Vec3s::from_rows(&rays.d);
-        let back = -d;
+        let back = -Vec3s::from_rows(&rays.d);
         let wi = (back.dot(s), back.dot(t_axis), back.dot(sh_n));
 
-        let scalar = self.lanes & (degenerate_uv.to_bitmask() | !frame_ok.to_bitmask());
-        let (p, p_error, n) = (p.to_rows(), p_error.to_rows(), n.to_rows());
+        let scalar = lanes & !frame_ok.to_bitmask();
+        let (p, p_error, n) = (self.p.to_rows(), self.p_error.to_rows(), self.n.to_rows());
         let (fs, ft, fn_) = (s.to_rows(), t_axis.to_rows(), sh_n.to_rows());
-        let (dpdu, dpdv) = (dpdu.to_rows(), dpdv.to_rows());
-        let (uv_u, uv_v) = (uv_u.to_array(), uv_v.to_array());
+        let (dpdu, dpdv) = (self.dpdu.to_rows(), self.dpdv.to_rows());
+        let (uv_u, uv_v) = (self.uv.0.to_array(), self.uv.1.to_array());
         let wi = (wi.0.to_array(), wi.1.to_array(), wi.2.to_array());
         let at = |rows: &Rows, k: usize| Vec3::new(rows[0][k], rows[1][k], rows[2][k]);
-        let mut lanes = self.lanes & !scalar;
-        while lanes != 0 {
-            let k = lanes.trailing_zeros() as usize;
-            lanes &= lanes - 1;
+        let mut done = lanes & !scalar;
+        while done != 0 {
+            let k = done.trailing_zeros() as usize;
+            done &= done - 1;
             out[k] = Some(SurfaceInteraction {
                 p: at(&p, k),
                 p_error: at(&p_error, k),
@@ -206,9 +384,9 @@ impl MeshHits {
                 uv: Vec2::new(uv_u[k], uv_v[k]),
                 dp_du: at(&dpdu, k),
                 dp_dv: at(&dpdv, k),
-                shape: self.shape[k],
+                shape: shape[k],
                 instance: None,
-                face: self.face[k],
+                face: face[k],
                 wi: Vec3::new(wi.0[k], wi.1[k], wi.2[k]),
             });
         }
