@@ -16,7 +16,7 @@ use glam::Vec3;
 use radia_bsdf::ShadingPoint;
 use radia_math::{max_component, Ray, Spectrum};
 use radia_sampling::{mis::power_heuristic, SampleStream, Sampler};
-use radia_scene::{LightContext, Scene, SurfaceInteraction};
+use radia_scene::{LightContext, Scene, ShadowEnds, SurfaceInteraction};
 
 /// The sample dimensions of a path (see `radia_sampling::sampler`): the camera's block, then
 /// one block of [`BOUNCE_DIMS`] values per bounce, whether or not a bounce uses them all, so
@@ -107,7 +107,7 @@ impl PathIntegrator {
             let mut shadow = None;
             let goes_on = self.bounce(scene, &mut path, hit.as_ref(), sampler, stats, &mut shadow);
             if let Some(shadow) = &shadow {
-                let transmittance = scene.transmittance(&shadow.ray, shadow.crossings);
+                let transmittance = scene.transmittance(&shadow.ends.ray(), shadow.crossings);
                 shadow.resolve(&mut path, transmittance);
             }
             if !goes_on {
@@ -324,7 +324,7 @@ impl PathIntegrator {
         // in 4- and 8-byte pieces and copied out with 64-byte loads, which stall on store
         // forwarding (7% of the packet loop on the Cornell box).
         let slot = out.insert(PendingShadow::EMPTY);
-        slot.ray = si.shadow_ray(es);
+        slot.ends = si.shadow_ends(es);
         slot.crossings = crossings;
         slot.beta = beta;
         slot.f_radiance = f * es.radiance;
@@ -375,7 +375,9 @@ impl PathState {
 /// A next-event estimate waiting for its shadow ray.
 #[derive(Clone, Copy)]
 pub(crate) struct PendingShadow {
-    pub ray: Ray,
+    /// What the shadow ray joins (the ray is made where it is traced: sixteen at once in the
+    /// packet loop).
+    pub ends: ShadowEnds,
     /// Null surfaces the shadow ray may cross.
     pub crossings: u32,
     /// The path's throughput at the vertex.
@@ -389,10 +391,14 @@ pub(crate) struct PendingShadow {
 impl PendingShadow {
     /// A placeholder, overwritten field by field.
     const EMPTY: Self = Self {
-        ray: Ray {
-            o: Vec3::ZERO,
-            d: Vec3::Z,
-            t_max: 0.0,
+        ends: ShadowEnds {
+            p: Vec3::ZERO,
+            p_error: Vec3::ZERO,
+            n: Vec3::ZERO,
+            target: Vec3::ZERO,
+            target_n: Vec3::ZERO,
+            target_error: Vec3::ZERO,
+            at_infinity: false,
         },
         crossings: 0,
         beta: Spectrum::ZERO,

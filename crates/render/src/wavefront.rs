@@ -14,7 +14,7 @@ use crate::path::{PathIntegrator, PathState, PathStats, PendingShadow};
 use glam::Vec2;
 use radia_math::Spectrum;
 use radia_sampling::{SampleStream, Sampler};
-use radia_scene::{RayPacket, Scene, SurfaceInteraction, PACKET_LANES};
+use radia_scene::{RayPacket, Scene, ShadowLanes, SurfaceInteraction, PACKET_LANES};
 
 /// Paths in flight per packet.
 pub const LANES: usize = PACKET_LANES;
@@ -108,13 +108,14 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
             }
         }
 
-        // ---- Shadow rays, all lanes at once ----
-        shadows.active = 0;
+        // ---- Shadow rays, made and traced all lanes at once ----
+        let mut ends = ShadowLanes::new();
         for (k, lane) in lanes.iter().enumerate() {
             if let Some(shadow) = lane.as_ref().and_then(|l| l.shadow.as_ref()) {
-                shadows.set(k, &shadow.ray);
+                ends.push(k, &shadow.ends);
             }
         }
+        ends.write(&mut shadows);
         let blocked = scene.occluded_packet(&shadows);
         for (k, lane) in lanes.iter_mut().enumerate() {
             let Some(lane) = lane else { continue };
@@ -122,7 +123,7 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
             // forwarding).
             if let Some(shadow) = &lane.shadow {
                 let transmittance = if blocked & (1 << k) != 0 {
-                    scene.transmittance_of_blocked(&shadow.ray, shadow.crossings)
+                    scene.transmittance_of_blocked(&shadows.ray(k), shadow.crossings)
                 } else {
                     1.0
                 };

@@ -10,6 +10,7 @@ pub mod emitter;
 mod fingerprint;
 pub mod lights;
 pub mod memory;
+mod shadow_lanes;
 pub mod shape;
 mod spherical;
 
@@ -18,6 +19,7 @@ pub use camera::{look_at, Camera};
 pub use description::*;
 pub use emitter::{Emitter, EmitterSample};
 pub use lights::{LightContext, LightSamplerKind, Lights};
+pub use shadow_lanes::ShadowLanes;
 use shape::{MeshHits, ShapeKind, SphereHits};
 pub use shape::{Shape, SurfaceInteraction};
 
@@ -402,17 +404,67 @@ impl SurfaceInteraction {
     /// read back whole, a store-forwarding stall (5% of the packet loop on the Cornell box).
     #[inline(always)]
     pub fn shadow_ray(&self, es: &EmitterSample) -> Ray {
-        if es.dist.is_finite() {
-            self.spawn_ray_to_surface(es.p, es.n, es.p_error)
-        } else {
-            self.spawn_ray_towards_infinity(es.d)
-        }
+        self.shadow_ends(es).ray()
     }
 
     /// A shadow ray in direction `d` towards something at infinity.
     #[inline]
     pub fn spawn_ray_towards_infinity(&self, d: Vec3) -> Ray {
         self.spawn_ray(d)
+    }
+
+    /// What [`Self::shadow_ray`] joins, for the ray to be made later
+    /// ([`ShadowEnds::ray`], or sixteen at once by [`ShadowLanes`]).
+    #[inline(always)]
+    pub fn shadow_ends(&self, es: &EmitterSample) -> ShadowEnds {
+        let at_infinity = !es.dist.is_finite();
+        ShadowEnds {
+            p: self.p,
+            p_error: self.p_error,
+            n: self.n,
+            target: if at_infinity { es.d } else { es.p },
+            target_n: es.n,
+            target_error: es.p_error,
+            at_infinity,
+        }
+    }
+}
+
+/// The two ends of a shadow ray before either is moved off its surface: the point it leaves
+/// (its position, error bound and geometric normal) and the emitter sample's point with its
+/// own, or for a light at infinity the direction towards it.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadowEnds {
+    pub p: Vec3,
+    pub p_error: Vec3,
+    pub n: Vec3,
+    /// The point aimed at, or the direction when `at_infinity`.
+    pub target: Vec3,
+    pub target_n: Vec3,
+    pub target_error: Vec3,
+    pub at_infinity: bool,
+}
+
+impl ShadowEnds {
+    /// The shadow ray ([`SurfaceInteraction::shadow_ray`] of the same sample).
+    #[inline(always)]
+    pub fn ray(&self) -> Ray {
+        if self.at_infinity {
+            Ray::new(
+                offset_origin(self.p, self.p_error, self.n, self.target),
+                self.target,
+                f32::INFINITY,
+            )
+        } else {
+            let o = offset_origin(self.p, self.p_error, self.n, self.target - self.p);
+            let t = offset_origin(
+                self.target,
+                self.target_error,
+                self.target_n,
+                o - self.target,
+            );
+            shadow_ray(o, t)
+        }
     }
 }
 
