@@ -45,19 +45,19 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
     let (mut rays, mut shadows) = (RayPacket::new(), RayPacket::new());
     loop {
         // ---- Free lanes take the next camera samples ----
-        // Their rays are made afterwards, together: a camera ray is a chain of a division
-        // and two square roots, and made one lane at a time between the sampler's work the
-        // chains ran one after another (a fifth of the loop's own time on
-        // `scenes/furnace.xml`, whose paths are short).
+        // Their rays are made afterwards, sixteen at once (`Camera::generate_rays`): a camera
+        // ray is a chain of a division and two square roots, and made one lane at a time
+        // between the sampler's work the chains ran one after another (a fifth of the
+        // loop's own time on `scenes/furnace.xml`, whose paths are short).
         let mut fresh = 0u32;
-        let mut films = [Vec2::ZERO; LANES];
+        let mut films = [[0.0; LANES]; 2];
         for (k, lane) in lanes.iter_mut().enumerate() {
             if lane.is_some() || next == out.len() {
                 continue;
             }
             let Some(cs) = samples.next() else { break };
             next += 1;
-            films[k] = cs.film;
+            (films[0][k], films[1][k]) = (cs.film.x, cs.film.y);
             fresh |= 1 << k;
             *lane = Some(Lane {
                 slot: next - 1,
@@ -67,8 +67,12 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
                 shadow: None,
             });
         }
+        let camera_rays = (fresh != 0).then(|| scene.camera.generate_rays(&films));
         for k in (0..LANES).filter(|k| fresh & (1 << k) != 0) {
-            let ray = scene.camera.generate_ray(films[k]);
+            let ray = camera_rays
+                .as_ref()
+                .expect("made for the fresh lanes")
+                .ray(k);
             let lane = lanes[k].as_mut().expect("a lane just filled");
             match integrator.start(ray) {
                 Some(path) => lane.path = path,
