@@ -358,7 +358,12 @@ impl Bsdf {
     /// eval and pdf together (one call in the NEE hot path).
     #[inline]
     pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
-        (self.eval(sp, wi, wo), self.pdf(sp, wi, wo))
+        match self {
+            // Models whose value and density share costly steps compute them together.
+            Bsdf::Principled(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::RoughConductor(m) => m.eval_pdf(sp, wi, wo),
+            _ => (self.eval(sp, wi, wo), self.pdf(sp, wi, wo)),
+        }
     }
 }
 

@@ -128,7 +128,12 @@ impl MicrofacetDistribution {
     /// Density (per solid angle of `m`) with which [`Self::sample`] returns `m`.
     #[inline]
     pub fn pdf(&self, wi: Vec3, m: Vec3) -> f32 {
-        let d = self.eval(m);
+        self.pdf_given(self.eval(m), wi, m)
+    }
+
+    /// [`Self::pdf`] given D(m) = `d` (`self.eval(m)`), for callers that evaluated it already.
+    #[inline]
+    pub fn pdf_given(&self, d: f32, wi: Vec3, m: Vec3) -> f32 {
         if self.sample_visible {
             d * self.visible_g1(wi, m) * wi.dot(m).abs() / wi.z
         } else {

@@ -107,6 +107,25 @@ struct Weights {
     bsdf: f32,
 }
 
+/// What evaluating the model and its density at (wi, wo) share ([`Principled::pair`]).
+struct Pair {
+    w: Weights,
+    cos_i: f32,
+    cos_o: f32,
+    reflect: bool,
+    refract: bool,
+    front: bool,
+    /// η on the path's side: η from the front, 1/η from the back.
+    eta_path: f32,
+    /// The half vector on the upper side.
+    wh: Vec3,
+    dist: MicrofacetDistribution,
+    dot_i: f32,
+    dot_o: f32,
+    /// The dielectric Fresnel reflectance at ωh.
+    f: f32,
+}
+
 #[inline]
 fn opt_1(t: &Option<Texture>, sp: &ShadingPoint) -> f32 {
     t.as_ref().map_or(0.0, |t| t.eval_1(sp))
@@ -238,27 +257,100 @@ impl Principled {
         h.is_finite().then_some(h)
     }
 
+    /// What [`Principled::eval`] and [`Principled::pdf`] both find first for (wi, wo): the
+    /// lobe weights, the half vector, the distribution and the Fresnel term there. `None`
+    /// where both are zero (grazing wi, wo in the plane, no half vector).
     #[inline]
-    pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
+    fn pair(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Option<Pair> {
         let cos_i = wi.z;
         let cos_o = wo.z;
         let reflect = cos_i * cos_o > 0.0;
         let refract = cos_i * cos_o < 0.0;
         if cos_i == 0.0 || !(reflect || refract) {
-            return Spectrum::ZERO;
+            return None;
         }
         let w = self.weights(sp);
-        let metallic = w.metallic;
-        let base_color = self.base_color.eval(sp);
         let front = cos_i > 0.0;
         let eta_path = if front { self.eta } else { 1.0 / self.eta };
-        let inv_eta_path = 1.0 / eta_path;
-        let Some(wh) = Self::half_vector(wi, wo, reflect, eta_path) else {
-            return Spectrum::ZERO;
-        };
+        let wh = Self::half_vector(wi, wo, reflect, eta_path)?;
         let dist = self.distribution(&w);
         let (dot_i, dot_o) = (wi.dot(wh), wo.dot(wh));
         let f = fresnel_dielectric(dot_i, self.eta).f;
+        Some(Pair {
+            w,
+            cos_i,
+            cos_o,
+            reflect,
+            refract,
+            front,
+            eta_path,
+            wh,
+            dist,
+            dot_i,
+            dot_o,
+            f,
+        })
+    }
+
+    #[inline]
+    pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
+        match self.pair(sp, wi, wo) {
+            Some(q) => self.eval_pair(sp, wi, wo, &q, None),
+            None => Spectrum::ZERO,
+        }
+    }
+
+    #[inline]
+    pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
+        match self.pair(sp, wi, wo) {
+            Some(q) => self.pdf_pair(sp, wi, wo, &q, None),
+            None => 0.0,
+        }
+    }
+
+    /// [`Principled::eval`] and [`Principled::pdf`] at once: the weights' textures, the half
+    /// vector (in f64), the Fresnel term and D(ωh) found once (next-event estimation asks
+    /// for both at every vertex, where the two calls were a fifth of a render of
+    /// `scenes/principled.xml`). The same values bit for bit.
+    #[inline]
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let Some(q) = self.pair(sp, wi, wo) else {
+            return (Spectrum::ZERO, 0.0);
+        };
+        let d = q.dist.eval(q.wh);
+        (
+            self.eval_pair(sp, wi, wo, &q, Some(d)),
+            self.pdf_pair(sp, wi, wo, &q, Some(d)),
+        )
+    }
+
+    /// [`Principled::eval`] given its [`Pair`] (and D(ωh) if known).
+    #[inline(always)]
+    fn eval_pair(
+        &self,
+        sp: &ShadingPoint,
+        wi: Vec3,
+        wo: Vec3,
+        q: &Pair,
+        d_wh: Option<f32>,
+    ) -> Spectrum {
+        let Pair {
+            ref w,
+            cos_i,
+            cos_o,
+            reflect,
+            refract,
+            front,
+            eta_path,
+            wh,
+            ref dist,
+            dot_i,
+            dot_o,
+            f,
+        } = *q;
+        let metallic = w.metallic;
+        let base_color = self.base_color.eval(sp);
+        let inv_eta_path = 1.0 / eta_path;
         let refl_ok = reflect && mac_mic_compatible(wh, wi, wo, cos_i, true);
         let refr_ok = refract && mac_mic_compatible(wh, wi, wo, cos_i, false);
 
@@ -272,7 +364,7 @@ impl Principled {
 
         let mut value = Spectrum::ZERO;
         if spec_reflect || spec_trans {
-            let d = dist.eval(wh);
+            let d = d_wh.unwrap_or_else(|| dist.eval(wh));
             let g = dist.g(wi, wo, wh, Shadowing::Separable);
             if spec_reflect {
                 let has_tint = self.spec_tint.is_some();
@@ -350,32 +442,29 @@ impl Principled {
         }
     }
 
-    #[inline]
-    pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        let cos_i = wi.z;
-        if cos_i == 0.0 {
-            return 0.0;
-        }
-        let w = self.weights(sp);
-        let front = cos_i > 0.0;
+    /// [`Principled::pdf`] given its [`Pair`] (and D(ωh) if known).
+    #[inline(always)]
+    fn pdf_pair(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3, q: &Pair, d_wh: Option<f32>) -> f32 {
+        let Pair {
+            ref w,
+            cos_i,
+            reflect,
+            refract,
+            front,
+            eta_path,
+            wh,
+            ref dist,
+            dot_i,
+            dot_o,
+            f,
+            ..
+        } = *q;
         // What `sample` refuses (Mitsuba: `active &= front_side || bsdf > 0`).
         if !(front || w.bsdf > 0.0 && self.spec_trans.is_some()) {
             return 0.0;
         }
-        let cos_o = wo.z;
-        let reflect = cos_i * cos_o > 0.0;
-        let refract = cos_i * cos_o < 0.0;
-        if !(reflect || refract) {
-            return 0.0;
-        }
-        let eta_path = if front { self.eta } else { 1.0 / self.eta };
-        let Some(wh) = Self::half_vector(wi, wo, reflect, eta_path) else {
-            return 0.0;
-        };
-        let dist = self.distribution(&w);
-        let (dot_i, dot_o) = (wi.dot(wh), wo.dot(wh));
-        let f = fresnel_dielectric(dot_i, self.eta).f;
-        let Some(p) = self.probabilities(&w, front, f) else {
+        let d = || d_wh.unwrap_or_else(|| dist.eval(wh));
+        let Some(p) = self.probabilities(w, front, f) else {
             return 0.0;
         };
         let dwh_dwo = if self.spec_trans.is_some() && !reflect {
@@ -388,7 +477,7 @@ impl Principled {
         let refl_ok = reflect && mac_mic_compatible(wh, wi, wo, cos_i, true);
         let wi_up = mulsign(wi, cos_i);
         if refl_ok && p.spec_reflect > 0.0 {
-            pdf += p.spec_reflect * dist.pdf(wi_up, wh) * dwh_dwo;
+            pdf += p.spec_reflect * dist.pdf_given(d(), wi_up, wh) * dwh_dwo;
         }
         if reflect {
             pdf += p.diffuse * warp::cosine_hemisphere_pdf(wo);
@@ -398,7 +487,7 @@ impl Principled {
             && p.spec_trans > 0.0
             && mac_mic_compatible(wh, wi, wo, cos_i, false)
         {
-            pdf += p.spec_trans * dist.pdf(wi_up, wh) * dwh_dwo;
+            pdf += p.spec_trans * dist.pdf_given(d(), wi_up, wh) * dwh_dwo;
         }
         if self.clearcoat.is_some() && refl_ok && p.clearcoat > 0.0 {
             let gloss = self.clearcoat_gloss.eval_1(sp);

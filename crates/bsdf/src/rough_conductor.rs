@@ -46,7 +46,19 @@ pub(crate) fn microfacet_reflection(
         return None;
     }
     let h = (wi + wo).normalize();
-    let dh = d.eval(h);
+    microfacet_reflection_at(d, shadowing, wi, wo, h, d.eval(h))
+}
+
+/// [`microfacet_reflection`] given the half vector `h` and D(h) = `dh` (for wi, wo above).
+#[inline]
+fn microfacet_reflection_at(
+    d: &MicrofacetDistribution,
+    shadowing: Shadowing,
+    wi: Vec3,
+    wo: Vec3,
+    h: Vec3,
+    dh: f32,
+) -> Option<(f32, Vec3)> {
     if !(dh > 0.0) {
         return None;
     }
@@ -62,14 +74,27 @@ pub(crate) fn microfacet_reflection_pdf(d: &MicrofacetDistribution, wi: Vec3, wo
         return 0.0;
     }
     let h = (wi + wo).normalize();
+    microfacet_reflection_pdf_at(d, wi, wo, h, || d.eval(h))
+}
+
+/// [`microfacet_reflection_pdf`] given the half vector `h` and D(h) (`dh`, asked for only
+/// where needed), for wi, wo above.
+#[inline]
+fn microfacet_reflection_pdf_at(
+    d: &MicrofacetDistribution,
+    wi: Vec3,
+    wo: Vec3,
+    h: Vec3,
+    dh: impl FnOnce() -> f32,
+) -> f32 {
     // The sidedness checks smith_g1 makes in eval and sample, replicated (as Mitsuba).
     if !(wi.dot(h) > 0.0 && wo.dot(h) > 0.0) {
         return 0.0;
     }
     let p = if d.sample_visible {
-        d.eval(h) * d.visible_g1(wi, h) / (4.0 * wi.z)
+        dh() * d.visible_g1(wi, h) / (4.0 * wi.z)
     } else {
-        d.pdf(wi, h) / (4.0 * wo.dot(h))
+        d.pdf_given(dh(), wi, h) / (4.0 * wo.dot(h))
     };
     if p.is_finite() {
         p
@@ -172,6 +197,27 @@ impl RoughConductor {
     #[inline]
     pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
         microfacet_reflection_pdf(&self.distribution.at(&self.roughness, sp), wi, wo)
+    }
+
+    /// [`RoughConductor::eval`] and [`RoughConductor::pdf`] at once: the roughness
+    /// textures, the half vector and D(h) found once. The same values bit for bit.
+    #[inline]
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let dist = self.distribution.at(&self.roughness, sp);
+        if !(wi.z > 0.0 && wo.z > 0.0) {
+            return (Spectrum::ZERO, 0.0);
+        }
+        let h = (wi + wo).normalize();
+        let dh = dist.eval(h);
+        let value = match microfacet_reflection_at(&dist, self.shadowing, wi, wo, h, dh) {
+            Some((v, h)) => {
+                fresnel_conductor(wi.dot(h), self.eta, self.k)
+                    * self.specular_reflectance.eval(sp)
+                    * v
+            }
+            None => Spectrum::ZERO,
+        };
+        (value, microfacet_reflection_pdf_at(&dist, wi, wo, h, || dh))
     }
 
     #[inline]

@@ -308,6 +308,18 @@ pub fn check_consistency(what: &str, b: &Bsdf, wi: Vec3, n: usize, rel: f32) {
         }
         let pdf = b.pdf(&SP, wi, s.wo);
         let f = b.eval(&SP, wi, s.wo);
+        // eval_pdf (which some models compute in one pass) is eval and pdf bit for bit, at
+        // the sampled direction and at its mirror image through the surface.
+        for wo in [s.wo, Vec3::new(s.wo.x, s.wo.y, -s.wo.z)] {
+            let (fe, pe) = b.eval_pdf(&SP, wi, wo);
+            let (fs, ps) = (b.eval(&SP, wi, wo), b.pdf(&SP, wi, wo));
+            assert!(
+                fe.to_array().map(f32::to_bits) == fs.to_array().map(f32::to_bits)
+                    && pe.to_bits() == ps.to_bits(),
+                "{}: eval_pdf at {wo} gives ({fe}, {pe}), eval and pdf ({fs}, {ps})",
+                ctx()
+            );
+        }
         let w = f / pdf;
         let scale = w.max_element().max(s.weight.max_element());
         let agree = |rel: f32| {
