@@ -20,7 +20,7 @@ pub use description::*;
 pub use emitter::{Emitter, EmitterSample};
 pub use lights::{LightContext, LightSamplerKind, Lights};
 pub use shadow_lanes::ShadowLanes;
-use shape::{MeshHits, ShapeKind, SphereHits};
+use shape::{DiskHits, MeshHits, ShapeKind, SphereHits};
 pub use shape::{Shape, SurfaceInteraction};
 
 use glam::Vec3;
@@ -157,11 +157,12 @@ impl Scene {
         out: &mut [Option<SurfaceInteraction>; PACKET_LANES],
     ) {
         let hits = self.accel.intersect_packet(&self.shapes, rays);
-        // Hits on mesh triangles and on spheres are gathered and their interactions computed
-        // together (`shape::MeshHits`, `shape::SphereHits`); the others, and the lanes those
-        // hand back, one by one.
+        // Hits on mesh triangles, spheres and disks are gathered and their interactions
+        // computed together (`shape::MeshHits`, `SphereHits`, `DiskHits`); hits on instances,
+        // and the lanes those hand back, one by one.
         let mut meshes = MeshHits::new();
         let mut spheres = SphereHits::new();
+        let mut disks = DiskHits::new();
         let mut one_by_one = 0u32;
         for (lane, si) in out.iter_mut().enumerate() {
             *si = None;
@@ -177,11 +178,13 @@ impl Scene {
                     });
                 }
                 kind @ ShapeKind::Sphere { .. } => spheres.push(lane, shape, kind),
+                kind @ ShapeKind::Disk { .. } => disks.push(lane, shape, kind),
                 _ => one_by_one |= 1 << lane,
             }
         }
         one_by_one |= meshes.interactions(&hits, rays, out);
         one_by_one |= spheres.interactions(&hits, rays, out);
+        one_by_one |= disks.interactions(&hits, rays, out);
         while one_by_one != 0 {
             let lane = one_by_one.trailing_zeros() as usize;
             one_by_one &= one_by_one - 1;

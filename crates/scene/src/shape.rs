@@ -4,7 +4,7 @@
 
 mod lanes;
 
-pub(crate) use lanes::{MeshHits, SphereHits};
+pub(crate) use lanes::{DiskHits, MeshHits, SphereHits};
 
 use crate::accel::{Hit, Primitive};
 use crate::description::{Geometry, Mesh};

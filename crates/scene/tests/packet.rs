@@ -589,7 +589,7 @@ fn interaction_bits(si: &radia_scene::SurfaceInteraction) -> String {
 /// normals, degenerate uv triangles (a basis around the face normal), glTF tangents, shading
 /// normals that vanish (zero vectors: the face normal instead) and a shading normal along
 /// ∂p/∂u (the frame's fallback), beside two analytic spheres, one flipped, rotated and
-/// scaled unevenly.
+/// scaled unevenly, and two disks, one turned and scaled, one flipped.
 fn every_mesh_branch() -> Scene {
     use radia_bsdf::{Bsdf, Diffuse};
     use radia_scene::*;
@@ -683,6 +683,31 @@ fn every_mesh_branch() -> Scene {
         },
         ..shape(Mesh::default())
     };
+    // Disks: one turned and scaled unevenly, one flipped.
+    let disk = |to_world: Affine3A, flip_normals: bool| ShapeDesc {
+        geometry: Geometry::Disk {
+            to_world,
+            flip_normals,
+        },
+        ..shape(Mesh::default())
+    };
+    let disks = [
+        disk(
+            Affine3A::from_scale_rotation_translation(
+                Vec3::new(0.9, 0.5, 1.0),
+                Quat::from_rotation_y(0.8) * Quat::from_rotation_x(-0.4),
+                Vec3::new(-0.5, -1.8, 1.0),
+            ),
+            false,
+        ),
+        disk(
+            Affine3A::from_rotation_translation(
+                Quat::from_rotation_x(1.4),
+                Vec3::new(1.6, 1.6, -1.0),
+            ),
+            true,
+        ),
+    ];
     Scene::build(SceneDescription {
         integrator: IntegratorDesc::default(),
         camera: CameraDesc {
@@ -701,7 +726,10 @@ fn every_mesh_branch() -> Scene {
             shape(along),
             sphere,
             turned,
-        ],
+        ]
+        .into_iter()
+        .chain(disks)
+        .collect(),
         shape_groups: Vec::new(),
         world_origin: glam::DVec3::ZERO,
         emitters: Vec::new(),
@@ -709,8 +737,8 @@ fn every_mesh_branch() -> Scene {
     })
 }
 
-/// The interactions of packet hits, computed sixteen lanes at once for mesh triangles and
-/// spheres, are
+/// The interactions of packet hits, computed sixteen lanes at once for mesh triangles,
+/// spheres and disks, are
 /// those of single rays in every field, bit for bit, on meshes that take every branch of the
 /// scalar code (and the lanes that take its rare ones are handed back to it).
 #[test]
@@ -755,7 +783,7 @@ fn packet_interactions_match_single_rays_in_every_field() {
         &failures[..failures.len().min(4)]
     );
     // Every mesh, the degenerate-uv and zero-normal triangles among them, and the sphere.
-    for shape in 0..6 {
+    for shape in 0..8 {
         assert!(
             faces.iter().any(|f| f.0 == shape),
             "shape {shape} never hit"

@@ -1,4 +1,5 @@
-//! The surface interactions of a packet's hits on mesh triangles and spheres, sixteen at once.
+//! The surface interactions of a packet's hits on mesh triangles, spheres and disks, sixteen
+//! at once.
 //!
 //! [`Shape::interaction`](super::Shape::interaction) computed one lane after another is a
 //! chain of three square roots and three divisions per hit, which a core runs one lane at a
@@ -9,7 +10,7 @@
 //!
 //! Lanes that would take a rare branch of the scalar code (tangent frames of normal-mapped
 //! glTF meshes, a degenerate uv triangle, a shading frame whose tangent vanishes, a sphere's
-//! pole, where its atan2 defers to the C library) are left to it: the `interactions` methods
+//! pole or a disk's centre, where their atan2 defers to the C library) are left to it: the `interactions` methods
 //! return them.
 
 use crate::description::Mesh;
@@ -308,6 +309,138 @@ impl SphereHits {
             uv: (u, theta / pi),
         };
         let scalar = self.lanes & !(phi_ok & theta_ok).to_bitmask();
+        let faces = [0; WIDTH];
+        scalar | surface.write(self.lanes & !scalar, hits, rays, &self.shape, &faces, out)
+    }
+}
+
+/// The packet's hits on disks, gathered lane by lane ([`DiskHits::push`]).
+pub(crate) struct DiskHits {
+    lanes: u32,
+    /// The disks' transforms, `[column][axis][lane]`, columns 0–2 linear, 3 the translation.
+    to_world: [Rows; 4],
+    to_local: [Rows; 4],
+    normal: Rows,
+    flipped: u32,
+    shape: [u32; WIDTH],
+}
+
+impl DiskHits {
+    pub(crate) fn new() -> Self {
+        Self {
+            lanes: 0,
+            to_world: [[[0.0; WIDTH]; 3]; 4],
+            to_local: [[[0.0; WIDTH]; 3]; 4],
+            normal: [[0.0; WIDTH]; 3],
+            flipped: 0,
+            shape: [0; WIDTH],
+        }
+    }
+
+    /// Lane `lane` hit disk `shape` (whose kind must be `ShapeKind::Disk`).
+    #[inline(always)]
+    pub(crate) fn push(&mut self, lane: usize, shape: u32, kind: &super::ShapeKind) {
+        let super::ShapeKind::Disk {
+            to_world,
+            to_local,
+            normal,
+            flip_normals,
+        } = kind
+        else {
+            unreachable!("DiskHits::push takes disks");
+        };
+        self.lanes |= 1 << lane;
+        self.shape[lane] = shape;
+        let columns = |m: &glam::Affine3A| {
+            [
+                m.matrix3.x_axis,
+                m.matrix3.y_axis,
+                m.matrix3.z_axis,
+                m.translation,
+            ]
+        };
+        for (col, (w, l)) in columns(to_world).iter().zip(columns(to_local)).enumerate() {
+            for axis in 0..3 {
+                self.to_world[col][axis][lane] = w[axis];
+                self.to_local[col][axis][lane] = l[axis];
+            }
+        }
+        for axis in 0..3 {
+            self.normal[axis][lane] = normal[axis];
+        }
+        if *flip_normals {
+            self.flipped |= 1 << lane;
+        }
+    }
+
+    /// As [`MeshHits::interactions`], for the disks (the disk branch of
+    /// `Shape::interaction`, with `disk_point_error`).
+    #[inline(always)]
+    pub(crate) fn interactions(
+        &self,
+        hits: &PacketHits,
+        rays: &RayPacket,
+        out: &mut [Option<SurfaceInteraction>; PACKET_LANES],
+    ) -> u32 {
+        if self.lanes == 0 {
+            return 0;
+        }
+        let affine = |m: &[Rows; 4]| {
+            let [x, y, z, t] = m.map(|c| Vec3s::from_rows(&c));
+            (Mat3s { cols: [x, y, z] }, t)
+        };
+        let ((world, world_t), (local_m, local_t)) =
+            (affine(&self.to_world), affine(&self.to_local));
+        let (o, d) = (Vec3s::from_rows(&rays.o), Vec3s::from_rows(&rays.d));
+        let t = f32x16::new(hits.t);
+        let zero = f32x16::ZERO;
+
+        // glam's `Affine3A::transform_point3`: ((c₀x + c₁y) + c₂z) + t.
+        let local = local_m.mul_vec3(o + d * t) + local_t;
+        let on_disk = Vec3s {
+            x: local.x,
+            y: local.y,
+            z: zero,
+        };
+        let p = world.mul_vec3(on_disk) + world_t;
+        // disk_point_error: (|M| |local| + |t|) γ₁₂.
+        let abs_m = Mat3s {
+            cols: world.cols.map(Vec3s::abs),
+        };
+        let p_error = (abs_m.mul_vec3(local.abs()) + world_t.abs()) * f32x16::splat(gamma(12));
+        let r = (local.x * local.x + local.y * local.y).sqrt();
+        let (phi, phi_ok) = lanes::atan2(local.y, local.x);
+        let v = phi * f32x16::splat(INV_TWO_PI);
+        let v = v.simd_lt(zero).select(v + f32x16::ONE, v);
+        let off_centre = r.simd_gt(zero);
+        let (c, s) = (
+            off_centre.select(local.x / r, f32x16::ONE),
+            off_centre.select(local.y / r, zero),
+        );
+        let dpdu = world.mul_vec3(Vec3s {
+            x: c,
+            y: s,
+            z: zero,
+        });
+        // Mitsuba's disk.cpp: dp/dv = (−y, x, 0) · 2π in local coordinates.
+        let two_pi = f32x16::splat(2.0 * PI);
+        let dpdv = world.mul_vec3(Vec3s {
+            x: -local.y * two_pi,
+            y: local.x * two_pi,
+            z: zero * two_pi,
+        });
+        let normal = Vec3s::from_rows(&self.normal);
+        let n = Vec3s::select(mask(self.flipped), -normal, normal);
+        let surface = Surface {
+            p,
+            p_error,
+            n,
+            sh_n: n,
+            dpdu,
+            dpdv,
+            uv: (r, v),
+        };
+        let scalar = self.lanes & !phi_ok.to_bitmask();
         let faces = [0; WIDTH];
         scalar | surface.write(self.lanes & !scalar, hits, rays, &self.shape, &faces, out)
     }
