@@ -184,6 +184,14 @@ pub fn unit_angle_z(v: Vec3s) -> (f32x16, f32x16) {
     (upper.select(angle, f32x16::splat(PI) - angle), ok)
 }
 
+/// A mask with the lanes whose bits are set in `bits` (bit k: lane k).
+#[inline(always)]
+pub fn mask(bits: u32) -> f32x16 {
+    f32x16::new(std::array::from_fn(|k| {
+        f32::from_bits(if bits & (1 << k) != 0 { u32::MAX } else { 0 })
+    }))
+}
+
 /// The magnitude of `a` with the sign of `b` (`f32::copysign`).
 #[inline(always)]
 pub fn copysign(a: f32x16, b: f32x16) -> f32x16 {

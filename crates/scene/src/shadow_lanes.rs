@@ -8,7 +8,7 @@
 //! for bit [`ShadowEnds::ray`].
 
 use crate::{RayPacket, ShadowEnds, PACKET_LANES, SHADOW_EPSILON};
-use radia_math::lanes::{f32x16, Vec3s, WIDTH};
+use radia_math::lanes::{f32x16, mask, Vec3s, WIDTH};
 use wide::i32x16;
 
 const _: () = assert!(WIDTH == PACKET_LANES);
@@ -86,14 +86,6 @@ impl ShadowLanes {
         packet.d = d.to_rows();
         packet.t_max = t_max.to_array();
     }
-}
-
-/// A mask with the lanes of `bits` set.
-#[inline(always)]
-fn mask(bits: u32) -> f32x16 {
-    f32x16::new(std::array::from_fn(|k| {
-        f32::from_bits(if bits & (1 << k) != 0 { u32::MAX } else { 0 })
-    }))
 }
 
 /// [`crate::offset_origin`] in each lane.

@@ -18,7 +18,7 @@ use crate::shape::SurfaceInteraction;
 use crate::{PacketHits, RayPacket, PACKET_LANES};
 use glam::{Vec2, Vec3};
 use radia_math::float::gamma;
-use radia_math::lanes::{self, f32x16, Mat3s, Vec3s, WIDTH};
+use radia_math::lanes::{self, f32x16, mask, Mat3s, Vec3s, WIDTH};
 use radia_math::{Frame, INV_TWO_PI, PI};
 
 const _: () = assert!(WIDTH == PACKET_LANES);
@@ -444,14 +444,6 @@ impl DiskHits {
         let faces = [0; WIDTH];
         scalar | surface.write(self.lanes & !scalar, hits, rays, &self.shape, &faces, out)
     }
-}
-
-/// A mask with the lanes of `bits` set.
-#[inline(always)]
-fn mask(bits: u32) -> f32x16 {
-    f32x16::new(std::array::from_fn(|k| {
-        f32::from_bits(if bits & (1 << k) != 0 { u32::MAX } else { 0 })
-    }))
 }
 
 /// The geometry of sixteen hits, up to their shading frames.
