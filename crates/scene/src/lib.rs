@@ -390,30 +390,12 @@ impl SurfaceInteraction {
         shadow_ray(o, target)
     }
 
-    /// A shadow ray towards the point `target` on a surface with geometric normal
-    /// `target_n`, known up to `target_error`: both ends are offset off their surfaces
-    /// (pbrt-v4's `SpawnRayTo` between two interactions), so that neither the surface left
-    /// nor the one aimed at can occlude it.
-    #[inline]
-    pub fn spawn_ray_to_surface(&self, target: Vec3, target_n: Vec3, target_error: Vec3) -> Ray {
-        let o = offset_origin(self.p, self.p_error, self.n, target - self.p);
-        let t = offset_origin(target, target_error, target_n, o - target);
-        shadow_ray(o, t)
-    }
-
-    /// The shadow ray of the emitter sample `es` taken from this point: to the sampled point
-    /// of a surface ([`Self::spawn_ray_to_surface`]), or along `es.d` for lights at infinity.
+    /// The shadow ray of the emitter sample `es` taken from this point ([`ShadowEnds::ray`]).
     /// Always inlined: called, it returned the ray through memory in pieces that the caller
     /// read back whole, a store-forwarding stall (5% of the packet loop on the Cornell box).
     #[inline(always)]
     pub fn shadow_ray(&self, es: &EmitterSample) -> Ray {
         self.shadow_ends(es).ray()
-    }
-
-    /// A shadow ray in direction `d` towards something at infinity.
-    #[inline]
-    pub fn spawn_ray_towards_infinity(&self, d: Vec3) -> Ray {
-        self.spawn_ray(d)
     }
 
     /// What [`Self::shadow_ray`] joins, for the ray to be made later
@@ -449,7 +431,10 @@ pub struct ShadowEnds {
 }
 
 impl ShadowEnds {
-    /// The shadow ray ([`SurfaceInteraction::shadow_ray`] of the same sample).
+    /// The shadow ray: to a point on a surface, both ends offset off their surfaces
+    /// (pbrt-v4's `SpawnRayTo` between two interactions), so that neither the surface left
+    /// nor the one aimed at can occlude it; towards a light at infinity, from the offset
+    /// origin along the direction.
     #[inline(always)]
     pub fn ray(&self) -> Ray {
         if self.at_infinity {

@@ -68,7 +68,7 @@ impl ShadowLanes {
         }
         let [p, p_error, n, target, target_n, target_error] =
             self.rows.map(|rows| Vec3s::from_rows(&rows));
-        // To a point: both ends offset (`SurfaceInteraction::spawn_ray_to_surface`).
+        // To a point: both ends offset.
         let o = offset_origin(p, p_error, n, target - p);
         let t = offset_origin(target, target_error, target_n, o - target);
         let delta = t - o;
@@ -76,7 +76,7 @@ impl ShadowLanes {
         let (mut o, mut d) = (o, delta.div(dist));
         let mut t_max = dist * f32x16::splat(1.0 - SHADOW_EPSILON);
         if self.at_infinity != 0 {
-            // Along a direction (`spawn_ray_towards_infinity`).
+            // Along a direction, towards a light at infinity.
             let far = mask(self.at_infinity);
             o = Vec3s::select(far, offset_origin(p, p_error, n, target), o);
             d = Vec3s::select(far, target, d);
@@ -134,7 +134,7 @@ mod tests {
             s ^= s << 5;
             s
         };
-        let mut value = |next: &mut dyn FnMut() -> u32| {
+        let value = |next: &mut dyn FnMut() -> u32| {
             let r = next();
             match r % 11 {
                 0 => 0.0,
@@ -145,8 +145,7 @@ mod tests {
                 }
             }
         };
-        let mut vec3 =
-            |next: &mut dyn FnMut() -> u32| Vec3::new(value(next), value(next), value(next));
+        let vec3 = |next: &mut dyn FnMut() -> u32| Vec3::new(value(next), value(next), value(next));
         let mut compared = 0;
         for _ in 0..4000 {
             let mut lanes = ShadowLanes::new();
