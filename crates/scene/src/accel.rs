@@ -523,11 +523,11 @@ impl Accel {
         self.owners[prim]
     }
 
-    /// Coordinate `axis` of vertex `k` of triangle `prim`, for gathering lanes
-    /// (`3 * k + axis` indexes the nine coordinate arrays; NaN for an analytic primitive).
+    /// The vertices of triangle `prim` (the copy the traversal tests; NaN for an analytic
+    /// primitive).
     #[inline(always)]
-    pub(crate) fn triangle_coordinate(&self, prim: usize, coordinate: usize) -> f32 {
-        self.lanes.coordinate(prim, coordinate)
+    pub(crate) fn triangle(&self, prim: usize) -> [Vec3; 3] {
+        self.lanes.triangle(prim)
     }
 
     /// Primitive `prim` (BVH order, as in [`Hit::prim`]): its shape and face, a triangle's

@@ -173,9 +173,7 @@ impl Scene {
             let [shape, face] = self.accel.owner(prim);
             match &self.shapes[shape as usize].kind {
                 ShapeKind::Mesh(mesh) if MeshHits::takes(mesh) => {
-                    meshes.push(lane, mesh, shape, face, |c| {
-                        self.accel.triangle_coordinate(prim, c)
-                    });
+                    meshes.push(lane, mesh, shape, face, self.accel.triangle(prim));
                 }
                 kind @ ShapeKind::Sphere { .. } => spheres.push(lane, shape, kind),
                 kind @ ShapeKind::Disk { .. } => disks.push(lane, shape, kind),

@@ -409,12 +409,6 @@ impl TriangleLanes {
         Self { coords }
     }
 
-    /// Coordinate `c` (`3 * vertex + axis`) of triangle `i`.
-    #[inline(always)]
-    pub fn coordinate(&self, i: usize, c: usize) -> f32 {
-        self.coords[c][i]
-    }
-
     /// The vertices of triangle `i` (NaN for a primitive that is not one).
     #[inline(always)]
     pub fn triangle(&self, i: usize) -> [Vec3; 3] {

@@ -68,25 +68,17 @@ impl MeshHits {
         mesh.tangents.is_none()
     }
 
-    /// Lane `lane` hit triangle `face` of `mesh` (shape `shape`), whose vertices are
-    /// `vertex(coordinate)` with coordinate `3 * k + axis` (the BVH's copy, which the scalar
-    /// code reads too).
+    /// Lane `lane` hit triangle `face` of `mesh` (shape `shape`) with vertices `v` (the
+    /// BVH's copy, which the scalar code reads too).
     #[inline(always)]
-    pub(crate) fn push(
-        &mut self,
-        lane: usize,
-        mesh: &Mesh,
-        shape: u32,
-        face: u32,
-        vertex: impl Fn(usize) -> f32,
-    ) {
+    pub(crate) fn push(&mut self, lane: usize, mesh: &Mesh, shape: u32, face: u32, v: [Vec3; 3]) {
         let bit = 1 << lane;
         self.lanes |= bit;
         self.shape[lane] = shape;
         self.face[lane] = face;
         for k in 0..3 {
             for axis in 0..3 {
-                self.v[k][axis][lane] = vertex(3 * k + axis);
+                self.v[k][axis][lane] = v[k][axis];
             }
         }
         let idx = mesh.indices[face as usize];
