@@ -47,7 +47,7 @@ def main(argv=None):
                     help="-D for the candidate's renders only (e.g. albedo=0.98 on the furnace: must fail)")
     ap.add_argument("--sampler", metavar="NAME",
                     help="the candidate's sampler: radia's independent, stratified, multijitter, "
-                         "orthogonal, ldsampler or sobol (default: the scene's own; the reference "
+                         "orthogonal, ldsampler, sobol or sobol+adaptive (--adaptive; default: the scene's own; the reference "
                          "is always Mitsuba's independent sampler with a box filter)")
     ap.add_argument("--candidate-scene", metavar="XML",
                     help="render the candidate from this XML instead (one SCENE only): must fail "

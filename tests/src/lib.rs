@@ -14,6 +14,7 @@ pub fn render_with(scene: &Scene, spp: u32, sampler: SamplerKind) -> RenderOutpu
             spp,
             seed: 3,
             sampler,
+            adaptive: false,
         },
         &AtomicBool::new(false),
         &|_| {},

@@ -47,6 +47,7 @@ fn max_pixel(scene: &Scene) -> f32 {
             spp: 16,
             seed: 1,
             sampler: SamplerKind::Independent,
+            adaptive: false,
         },
         &AtomicBool::new(false),
         &|_| {},

@@ -112,6 +112,7 @@ fn degenerate_triangles_are_dropped_with_one_counting_warning() {
                 spp: 64,
                 seed: 0,
                 sampler: SamplerKind::Independent,
+                adaptive: false,
             },
             &AtomicBool::new(false),
             &|_| {},

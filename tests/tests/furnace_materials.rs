@@ -88,6 +88,7 @@ fn render_pixels(scene: &Scene, spp: u32) -> (Vec<f64>, u64) {
             seed: 7,
             // The tolerance is in standard errors estimated as for independent pixels.
             sampler: SamplerKind::Independent,
+            adaptive: false,
         },
         &AtomicBool::new(false),
         &|_| {},

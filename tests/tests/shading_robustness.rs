@@ -121,6 +121,7 @@ fn extreme_materials_stay_finite_in_bsdf_queries_and_grazing_renders() {
                 spp: 4,
                 seed: 0,
                 sampler: SamplerKind::Independent,
+                adaptive: false,
             },
             &AtomicBool::new(false),
             &|_| {},

@@ -52,6 +52,7 @@ fn part(
         spp: SPP,
         seed: id.seed,
         sampler,
+        adaptive: false,
     };
     let out = render_part(scene, &options, range, &AtomicBool::new(false), &|_| {});
     assert_eq!(out.rendered, range);
@@ -67,6 +68,7 @@ fn single(scene: &Scene, sampler: SamplerKind, seed: u64) -> radia_render::Image
         spp: SPP,
         seed,
         sampler,
+        adaptive: false,
     };
     render(scene, &options, &AtomicBool::new(false), &|_| {}).image
 }

@@ -85,7 +85,15 @@ def set_mitsuba_threads(n):
 
 
 MITSUBA_SAMPLERS = ("independent", "stratified", "multijitter", "orthogonal", "ldsampler")
-RADIA_SAMPLERS = MITSUBA_SAMPLERS + ("sobol",)
+# "NAME+adaptive": radia's adaptive sampling (--adaptive) over that sampler.
+RADIA_SAMPLERS = MITSUBA_SAMPLERS + ("sobol", "sobol+adaptive")
+
+
+def split_sampler(name):
+    """(sampler, adaptive) of a radia sampler name such as "sobol+adaptive"."""
+    if name and name.endswith("+adaptive"):
+        return name[:-len("+adaptive")], True
+    return name, False
 FILTERS = ("box", "gaussian")
 
 
@@ -321,7 +329,8 @@ class RadiaRenderer:
         if self.rfilter:
             cmd += ["--rfilter", self.rfilter]
         if self.sampler:
-            cmd += ["--sampler", self.sampler]
+            sampler, adaptive = split_sampler(self.sampler)
+            cmd += ["--sampler", sampler] + (["--adaptive"] if adaptive else [])
         for d in self.extra_defines:
             cmd += ["-D", d]
         return cmd
@@ -398,8 +407,9 @@ class PackageRenderer:
             # "the stratified sampler renders 9 spp, not 8": every pass would say it;
             # infos[-1]["spp"] records it (as for the binary, whose stderr is not shown).
             warnings.filterwarnings("ignore", message="the .* sampler renders")
+            sampler, adaptive = split_sampler(self.sampler)
             arr, st = self.radia.render(self.scene, spp=spp, seed=seed, threads=self.threads,
-                                        sampler=self.sampler, stats=True)
+                                        sampler=sampler, stats=True, adaptive=adaptive)
         self.last_wall = time.perf_counter() - t0
         info = dict(spp=st.spp, render_s=st.seconds, wall_s=self.last_wall,
                     load_s=0.0 if self.infos else self.load_s,

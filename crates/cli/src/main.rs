@@ -60,6 +60,13 @@ enum Command {
         /// orthogonal, ldsampler (Mitsuba's) or sobol (radia's default when a scene names none).
         #[arg(long, value_name = "NAME", value_parser = parse_sampler)]
         sampler: Option<SamplerKind>,
+        /// Adaptive sampling: --spp becomes the average per pixel. A pilot pass of a quarter
+        /// of it measures the noise; the rest goes where it lowers the relative error most,
+        /// each pixel's count made from its neighbours' noise only, so the image stays
+        /// unbiased. Needs the independent or sobol sampler and the box filter (else the
+        /// samples are spread evenly, with a warning).
+        #[arg(long)]
+        adaptive: bool,
         /// Film size (overrides the scene's film): WIDTHxHEIGHT, or one number for a square.
         #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
         resolution: Option<(u32, u32)>,
@@ -234,6 +241,7 @@ fn run_render(command: Command) -> Result<ExitCode, String> {
         quiet,
         light_sampler,
         sampler,
+        adaptive,
         resolution,
         rfilter,
         time_budget,
@@ -353,11 +361,27 @@ fn run_render(command: Command) -> Result<ExitCode, String> {
         (None, Some(_)) => SamplerKind::MAX_SAMPLE_COUNT,
         (None, None) => scene.sampler.sample_count.max(1),
     };
+    let rounded = sampler.round_sample_count(asked);
+    let adaptive = adaptive
+        && {
+            let why = if samples.is_some() {
+                Some("a part of a split render samples evenly (adaptive sampling needs the whole image's pilot)".to_string())
+            } else if spp.is_none() && time_budget.is_some() {
+                Some("a time budget without --spp has no average to adapt (give --spp)".to_string())
+            } else {
+                radia_render::adaptive_unsupported(sampler, scene.film.filter, rounded)
+            };
+            if let Some(why) = &why {
+                eprintln!("radia: warning: adaptive sampling is off: {why}");
+            }
+            why.is_none()
+        };
     let options = RenderOptions {
         // As Mitsuba's samplers do, round to the nearest count the sampler can stratify.
-        spp: sampler.round_sample_count(asked),
+        spp: rounded,
         seed: seed.unwrap_or(scene.sampler.seed),
         sampler,
+        adaptive,
     };
     if options.spp != asked {
         eprintln!(

@@ -243,6 +243,7 @@ fn scene_file_tangents_glb() {
         spp: 16,
         seed: 5,
         sampler: SamplerKind::Independent,
+        adaptive: false,
     };
     let out = render(&scene, &options, &AtomicBool::new(false), &|_| {});
     assert_eq!(out.stats.invalid_samples, 0);

@@ -131,6 +131,7 @@ fn render_loaded(
         spp,
         seed,
         sampler: SamplerKind::Independent,
+        adaptive: false,
     };
     render(&scene, &options, &AtomicBool::new(false), &|_| {})
         .image

@@ -246,11 +246,13 @@ fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
 /// ``spp`` defaults to the scene's (rounded as its sampler requires, with a warning);
 /// ``seed`` is the seed of the sample sequences (0, as ``mi.render``); ``threads`` defaults to
 /// all cores; ``sampler`` overrides the scene's sampler by name, as ``radia render
-/// --sampler``. With ``stats=True`` the result comes as ``(result, RenderStats)``: the rays,
+/// --sampler``; ``adaptive=True`` spends ``spp`` as an average, where a pilot pass found
+/// noise, as ``radia render --adaptive`` (independent or sobol sampler and box filter only;
+/// else a warning and even sampling). With ``stats=True`` the result comes as ``(result, RenderStats)``: the rays,
 /// samples and dropped NaN/Inf samples the CLI reports. The GIL is released while rendering;
 /// Ctrl-C stops the render and raises ``KeyboardInterrupt``.
 #[pyfunction]
-#[pyo3(signature = (scene, spp=None, seed=0, threads=None, samples=None, aovs=None, sampler=None, stats=false))]
+#[pyo3(signature = (scene, spp=None, seed=0, threads=None, samples=None, aovs=None, sampler=None, stats=false, adaptive=false))]
 #[allow(clippy::too_many_arguments)] // Python's keyword arguments, each optional
 fn render(
     py: Python<'_>,
@@ -262,8 +264,11 @@ fn render(
     aovs: Option<&str>,
     sampler: Option<&str>,
     stats: bool,
+    adaptive: bool,
 ) -> PyResult<Py<PyAny>> {
-    let result = render_result(py, scene, spp, seed, threads, samples, aovs, sampler)?;
+    let result = render_result(
+        py, scene, spp, seed, threads, samples, aovs, sampler, adaptive,
+    )?;
     if !stats {
         return Ok(result.value);
     }
@@ -294,6 +299,7 @@ fn render_result(
     samples: Option<(u32, u32)>,
     aovs: Option<&str>,
     sampler: Option<&str>,
+    adaptive: bool,
 ) -> PyResult<Rendered> {
     let aov = match (aovs, &scene.scene.integrator.aov) {
         (None, own) => own.clone(),
@@ -326,10 +332,20 @@ fn render_result(
         })?,
     };
     let asked = spp.unwrap_or(scene.scene.sampler.sample_count).max(1);
+    let rounded = sampler.round_sample_count(asked);
+    let why_not = if samples.is_some() {
+        Some("a part of a split render samples evenly".to_string())
+    } else {
+        radia_render::adaptive_unsupported(sampler, scene.scene.film.filter, rounded)
+    };
+    if let (true, Some(why)) = (adaptive, &why_not) {
+        warn(py, &format!("adaptive sampling is off: {why}"))?;
+    }
     let options = RenderOptions {
-        spp: sampler.round_sample_count(asked),
+        spp: rounded,
         seed,
         sampler,
+        adaptive: adaptive && why_not.is_none(),
     };
     if options.spp != asked {
         warn(

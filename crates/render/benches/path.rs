@@ -56,6 +56,7 @@ fn options(sampler: &str) -> RenderOptions {
         spp: SPP,
         seed: 0,
         sampler,
+        adaptive: false,
     }
 }
 

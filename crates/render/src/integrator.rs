@@ -40,20 +40,43 @@ pub(crate) trait Integrator: Sync {
     ) -> Spectrum;
 
     /// The radiance of the camera samples `samples` (as many as `out` holds), with their
-    /// film positions, into `out` in their order. One [`Integrator::li`] after another unless
-    /// the integrator runs many samples at once.
+    /// film positions and the rays each traced, into `out` in their order. One
+    /// [`Integrator::li`] after another unless the integrator runs many samples at once.
     fn li_many<'a, S: Sampler + 'a>(
         &self,
         scene: &Scene,
         samples: impl Iterator<Item = CameraSample<'a, S>>,
-        out: &mut [(Vec2, Spectrum)],
+        out: &mut [Traced],
         stats: &mut PathStats,
     ) {
         for (o, mut cs) in out.iter_mut().zip(samples) {
             let ray = cs.ray(scene);
-            *o = (cs.pos, self.li(scene, ray, cs.pos, &mut cs.stream, stats));
+            let before = stats.rays;
+            let l = self.li(scene, ray, cs.pos, &mut cs.stream, stats);
+            *o = Traced {
+                pos: cs.pos,
+                l,
+                rays: (stats.rays - before) as u32,
+            };
         }
     }
+}
+
+/// A camera sample's result: its film position, radiance, and the rays it traced (its
+/// cost, for adaptive sampling).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Traced {
+    pub pos: Vec2,
+    pub l: Spectrum,
+    pub rays: u32,
+}
+
+impl Traced {
+    pub const EMPTY: Self = Self {
+        pos: Vec2::ZERO,
+        l: Spectrum::ZERO,
+        rays: 0,
+    };
 }
 
 impl Integrator for PathIntegrator {
@@ -74,7 +97,7 @@ impl Integrator for PathIntegrator {
         &self,
         scene: &Scene,
         samples: impl Iterator<Item = CameraSample<'a, S>>,
-        out: &mut [(Vec2, Spectrum)],
+        out: &mut [Traced],
         stats: &mut PathStats,
     ) {
         crate::wavefront::li_many(self, scene, samples, out, stats)

@@ -1,5 +1,6 @@
 //! Rendering: the path integrator, the film and the parallel tile renderer.
 
+pub mod adaptive;
 pub mod aov;
 pub mod classic;
 pub mod film;
@@ -14,6 +15,6 @@ mod wavefront;
 pub use aov::AovLayers;
 pub use film::{Film, Image};
 pub use renderer::{
-    render, render_part, render_part_until, render_part_with_aovs, render_until, FilmOutput,
-    RenderOptions, RenderOutput, RenderStats, SampleRange, PASS_SPP,
+    adaptive_unsupported, render, render_part, render_part_until, render_part_with_aovs,
+    render_until, FilmOutput, RenderOptions, RenderOutput, RenderStats, SampleRange, PASS_SPP,
 };

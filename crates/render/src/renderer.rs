@@ -10,16 +10,17 @@
 //! whatever the range, so a piece whose ends are multiples of it groups its samples exactly
 //! as the whole render does.
 
+use crate::adaptive::{self, PilotStats};
 use crate::aov::{AovFilm, AovIntegrator, AovLayers};
 use crate::classic::ClassicIntegrator;
 use crate::film::{Film, Filter, Image};
-use crate::integrator::{CameraSample, Integrator};
+use crate::integrator::{CameraSample, Integrator, Traced};
 use crate::npr::NprIntegrator;
 use crate::path::{layout, PathIntegrator, PathStats};
 use glam::{UVec2, Vec2};
 use radia_math::{Ray, Spectrum};
 use radia_sampling::{with_sampler, AnySampler, PixelKey, SampleStream, Sampler, SamplerKind};
-use radia_scene::{AovDesc, Scene};
+use radia_scene::{AovDesc, FilterDesc, Scene};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
@@ -43,6 +44,28 @@ pub struct RenderOptions {
     pub spp: u32,
     pub seed: u64,
     pub sampler: SamplerKind,
+    /// Adaptive sampling ([`crate::adaptive`]): `spp` becomes the average, spent where the
+    /// pilot pass found noise. Used when [`adaptive_unsupported`] finds nothing against it
+    /// (else the samples are spread evenly).
+    pub adaptive: bool,
+}
+
+/// Why adaptive sampling cannot be used with `sampler`, the film's `filter` and a budget
+/// of `spp`, if it cannot (see [`crate::adaptive`]).
+pub fn adaptive_unsupported(sampler: SamplerKind, filter: FilterDesc, spp: u32) -> Option<String> {
+    if !sampler.progressive() {
+        Some(format!(
+            "the {} sampler is stratified over its whole sample count (adaptive sampling \
+             needs independent or sobol)",
+            sampler.name()
+        ))
+    } else if filter != FilterDesc::Box {
+        Some("a filter wider than a pixel mixes the pixels' counts (adaptive sampling needs the box filter: --rfilter box)".into())
+    } else if adaptive::pilot_spp(spp).is_none() {
+        Some(format!("{spp} spp are too few to adapt (at least 8)"))
+    } else {
+        None
+    }
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -122,6 +145,10 @@ struct TileResult<T> {
     extras: T,
     stats: PathStats,
     invalid: u64,
+    /// Samples taken.
+    samples: u64,
+    /// The pilot's sums over the tile's pixels (adaptive sampling's pilot passes).
+    pilot: Option<PilotStats>,
 }
 
 /// Renders `scene`. `progress` is called with the number of samples finished so far (from
@@ -200,10 +227,19 @@ pub fn render_part_with_aovs(
 ) -> FilmOutput {
     let sampler = AnySampler::new(options.sampler, options.spp);
     let end = samples.end.min(sampler.sample_count());
+    // Adaptive sampling takes whole renders only (a part's counts would come from its own
+    // pilot, and the parts of one image would not agree).
+    let whole = samples.start == 0 && end == sampler.sample_count();
+    let pilot = (options.adaptive
+        && whole
+        && adaptive_unsupported(options.sampler, scene.film.filter, end).is_none())
+    .then(|| adaptive::pilot_spp(end))
+    .flatten();
     let job = Job {
         scene,
         sampler: &sampler,
         seed: options.seed,
+        pilot,
         samples: SampleRange::new(samples.start.min(end), end),
         deadline,
         cancel,
@@ -225,6 +261,8 @@ struct Job<'a> {
     scene: &'a Scene,
     sampler: &'a AnySampler,
     seed: u64,
+    /// Adaptive sampling's pilot spp, when it is on.
+    pilot: Option<u32>,
     /// Already clamped to the sampler's count.
     samples: SampleRange,
     deadline: Option<Instant>,
@@ -300,6 +338,50 @@ impl Extras for AovIntegrator<'_> {
     }
 }
 
+/// Sample indices per pixel of a pass.
+#[derive(Clone)]
+enum PassSamples<'a> {
+    /// The same indices for every pixel.
+    Even(std::ops::Range<u32>),
+    /// Adaptive sampling after the pilot: pass `share` of `shares` of each pixel's samples
+    /// beyond the pilot's, up to its count (row-major over an image `width` wide).
+    Share {
+        counts: &'a [u32],
+        width: u32,
+        pilot: u32,
+        share: u32,
+        shares: u32,
+    },
+}
+
+impl PassSamples<'_> {
+    /// The sample indices of pixel (`x`, `y`) in this pass.
+    #[inline]
+    fn range(&self, x: u32, y: u32) -> (u32, u32) {
+        match *self {
+            PassSamples::Even(ref spp) => (spp.start, spp.end),
+            PassSamples::Share {
+                counts,
+                width,
+                pilot,
+                share,
+                shares,
+            } => {
+                let rest = counts[(y * width + x) as usize].saturating_sub(pilot) as u64;
+                let at = |k: u32| pilot + (k as u64 * rest / shares as u64) as u32;
+                (at(share), at(share + 1))
+            }
+        }
+    }
+
+    /// Samples of pixel (`x`, `y`) in this pass.
+    #[inline]
+    fn len(&self, x: u32, y: u32) -> u32 {
+        let (a, b) = self.range(x, y);
+        b - a
+    }
+}
+
 /// The camera samples of a tile's pass in the film's order: pixel by pixel (rows, then
 /// columns), each pixel's sample indices in increasing order.
 struct TileSamples<'a, S> {
@@ -309,23 +391,24 @@ struct TileSamples<'a, S> {
     x0: u32,
     x1: u32,
     y1: u32,
-    spp: std::ops::Range<u32>,
-    /// The next sample: pixel (x, y), index s, and the pixel's key.
+    pass: PassSamples<'a>,
+    /// The next sample: pixel (x, y), index s (the pixel's end), and the pixel's key.
     x: u32,
     y: u32,
     s: u32,
+    s_end: u32,
     key: PixelKey,
 }
 
 impl<'a, S: Sampler> TileSamples<'a, S> {
-    /// The samples `spp` of the pixels of the `w` × `h` tile at (`x0`, `y0`).
+    /// The samples `pass` of the pixels of the `w` × `h` tile at (`x0`, `y0`).
     fn new(
         scene: &'a Scene,
         sampler: &'a S,
         seed: u64,
         (x0, y0): (u32, u32),
         (w, h): (u32, u32),
-        spp: std::ops::Range<u32>,
+        pass: PassSamples<'a>,
     ) -> Self {
         Self {
             scene,
@@ -334,8 +417,9 @@ impl<'a, S: Sampler> TileSamples<'a, S> {
             x0,
             x1: x0 + w,
             y1: y0 + h,
-            s: spp.start,
-            spp,
+            s: pass.range(x0, y0).0,
+            s_end: pass.range(x0, y0).1,
+            pass,
             x: x0,
             y: y0,
             key: PixelKey::new(seed, UVec2::new(x0, y0)),
@@ -348,8 +432,20 @@ impl<'a, S: Sampler> Iterator for TileSamples<'a, S> {
 
     #[inline]
     fn next(&mut self) -> Option<Self::Item> {
-        if self.y >= self.y1 {
-            return None;
+        while self.s == self.s_end {
+            if self.y >= self.y1 {
+                return None;
+            }
+            self.x += 1;
+            if self.x == self.x1 {
+                self.x = self.x0;
+                self.y += 1;
+                if self.y >= self.y1 {
+                    return None;
+                }
+            }
+            (self.s, self.s_end) = self.pass.range(self.x, self.y);
+            self.key = PixelKey::new(self.seed, UVec2::new(self.x, self.y));
         }
         let (x, y) = (self.x, self.y);
         let mut stream = SampleStream::new(self.sampler, self.key, self.s);
@@ -358,15 +454,6 @@ impl<'a, S: Sampler> Iterator for TileSamples<'a, S> {
         let size = &self.scene.film;
         let film = pos / Vec2::new(size.width as f32, size.height as f32);
         self.s += 1;
-        if self.s == self.spp.end {
-            self.s = self.spp.start;
-            self.x += 1;
-            if self.x == self.x1 {
-                self.x = self.x0;
-                self.y += 1;
-            }
-            self.key = PixelKey::new(self.seed, UVec2::new(self.x, self.y));
-        }
         Some(CameraSample { pos, film, stream })
     }
 }
@@ -381,6 +468,7 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
     let Job {
         scene,
         seed,
+        pilot,
         samples,
         deadline,
         cancel,
@@ -402,8 +490,30 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
         .collect();
     let done = AtomicU64::new(0);
 
+    // Adaptive sampling: passes up to the pilot's spp gather each pixel's statistics, then
+    // each pixel gets its count, and each of the passes that the rest of the budget makes
+    // takes the same share of every pixel's remaining samples (so that the passes are as
+    // long as even ones and a stop between two leaves every pixel the same fraction).
+    let block = pilot.map(adaptive::block_size).unwrap_or(1);
+    let mut pilot_stats = pilot.map(|_| PilotStats::new(w, h, block));
+    let mut counts: Option<Vec<u32>> = None;
+    let (mut share, mut shares) = (0u32, 0u32);
     let mut spp_start = samples.start;
-    while spp_start < samples.end {
+    loop {
+        let even_end = pilot.unwrap_or(samples.end);
+        if counts.is_none() && spp_start >= even_end {
+            match (pilot, &pilot_stats) {
+                (Some(pilot), Some(gathered)) => {
+                    counts = Some(adaptive::allocate(gathered, pilot, samples.end));
+                    shares = (samples.end - pilot).div_ceil(PASS_SPP).max(1);
+                }
+                _ => break,
+            }
+        }
+        if counts.is_some() && share == shares {
+            break;
+        }
+        let gathering = pilot.is_some() && counts.is_none();
         if let (Some(deadline), true) = (deadline, passes > 0) {
             let mean_pass = start.elapsed() / passes;
             if Instant::now() + mean_pass > deadline {
@@ -411,7 +521,17 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
             }
         }
         // Passes are aligned to multiples of PASS_SPP (see the module comment).
-        let spp_end = ((spp_start / PASS_SPP + 1) * PASS_SPP).min(samples.end);
+        let spp_end = ((spp_start / PASS_SPP + 1) * PASS_SPP).min(even_end);
+        let pass = match (&counts, pilot) {
+            (Some(counts), Some(pilot)) => PassSamples::Share {
+                counts,
+                width: w,
+                pilot,
+                share,
+                shares,
+            },
+            _ => PassSamples::Even(spp_start..spp_end),
+        };
         let results: Vec<Option<TileResult<E::Film>>> = tiles
             .par_iter()
             .map(|&(x0, y0)| {
@@ -419,6 +539,13 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
                     return None;
                 }
                 let (tw, th) = (tile.min(w - x0), tile.min(h - y0));
+                let pixels = || (y0..y0 + th).flat_map(move |y| (x0..x0 + tw).map(move |x| (x, y)));
+                let n: u64 = pixels().map(|(x, y)| pass.len(x, y) as u64).sum();
+                let mut tile_pilot = gathering.then(|| PilotStats::new(tw, th, block));
+                // Each sample's pixel, in the order the samples come (`TileSamples`).
+                let mut sample_pixels = pixels().flat_map(|(x, y)| {
+                    std::iter::repeat_n((x - x0, y - y0), pass.len(x, y) as usize)
+                });
                 let (fx, fy) = (x0 as i32 - margin, y0 as i32 - margin);
                 let (fw, fh) = (tw + 2 * margin as u32, th + 2 * margin as u32);
                 let mut tile_film = Film::new(fx, fy, fw, fh, filter);
@@ -426,18 +553,23 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
                 let mut pstats = PathStats::default();
                 let mut invalid = 0;
                 let samples =
-                    TileSamples::new(scene, sampler, seed, (x0, y0), (tw, th), spp_start..spp_end);
+                    TileSamples::new(scene, sampler, seed, (x0, y0), (tw, th), pass.clone());
                 if E::PER_SAMPLE {
                     // One sample at a time, with its extras beside it.
                     for mut cs in samples {
                         let (pos, ray) = (cs.pos, cs.ray(scene));
                         let stream = &mut cs.stream;
                         extras.add(scene, &mut tile_extras, pos, &ray);
+                        let before = pstats.rays;
                         let l = if extras.beauty() {
                             integrator.li(scene, ray, pos, stream, &mut pstats)
                         } else {
                             Spectrum::ZERO
                         };
+                        let (px, py) = sample_pixels.next().expect("one pixel per sample");
+                        if let Some(stats) = &mut tile_pilot {
+                            stats.add(px, py, l, (pstats.rays - before) as u32);
+                        }
                         if l.is_finite() {
                             tile_film.add_sample(pos, l);
                         } else {
@@ -448,49 +580,67 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
                     // The tile's samples in pixel order, handed to the integrator at once
                     // (the path integrator runs many of them together), then added to the
                     // film in that order.
-                    let nspp = (spp_end - spp_start) as usize;
-                    let mut out = vec![(Vec2::ZERO, Spectrum::ZERO); (tw * th) as usize * nspp];
+                    let mut out = vec![Traced::EMPTY; n as usize];
                     integrator.li_many(scene, samples, &mut out, &mut pstats);
-                    for &(pos, l) in &out {
-                        if l.is_finite() {
-                            tile_film.add_sample(pos, l);
+                    for t in &out {
+                        if t.l.is_finite() {
+                            tile_film.add_sample(t.pos, t.l);
                         } else {
                             invalid += 1;
+                        }
+                    }
+                    if let Some(stats) = &mut tile_pilot {
+                        for (t, (px, py)) in out.iter().zip(sample_pixels) {
+                            stats.add(px, py, t.l, t.rays);
                         }
                     }
                 }
                 if cancel.load(Ordering::Relaxed) {
                     return None;
                 }
-                let n = (tw * th * (spp_end - spp_start)) as u64;
                 progress(done.fetch_add(n, Ordering::Relaxed) + n);
                 Some(TileResult {
                     film: tile_film,
                     extras: tile_extras,
                     stats: pstats,
                     invalid,
+                    samples: n,
+                    pilot: tile_pilot,
                 })
             })
             .collect();
         if results.iter().any(Option::is_none) {
             break;
         }
-        for r in results.into_iter().flatten() {
+        for (r, &(x0, y0)) in results.into_iter().flatten().zip(&tiles) {
             film.merge(&r.film);
             E::merge(&mut extras_film, &r.extras);
             stats.rays += r.stats.rays;
             stats.invalid_samples += r.invalid;
+            stats.samples += r.samples;
+            if let (Some(all), Some(tile)) = (&mut pilot_stats, &r.pilot) {
+                all.merge(tile, x0, y0);
+            }
         }
-        stats.samples += w as u64 * h as u64 * (spp_end - spp_start) as u64;
-        stats.spp = spp_end - samples.start;
-        spp_start = spp_end;
+        if counts.is_some() {
+            // Adaptive: the mean count per pixel.
+            stats.spp = (stats.samples as f64 / (w as f64 * h as f64)).round() as u32;
+            share += 1;
+        } else {
+            stats.spp = spp_end - samples.start;
+            spp_start = spp_end;
+        }
         passes += 1;
     }
     let out = FilmOutput {
         film,
         aovs: None,
         stats,
-        rendered: SampleRange::new(samples.start, spp_start),
+        rendered: if counts.is_some() {
+            SampleRange::new(samples.start, samples.start + stats.spp)
+        } else {
+            SampleRange::new(samples.start, spp_start)
+        },
     };
     (out, extras_film)
 }

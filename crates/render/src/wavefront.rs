@@ -9,7 +9,7 @@
 //! values, and the tile loop adds the results to the film in the order of the samples, so
 //! the image is the one `li` renders, bit for bit.
 
-use crate::integrator::CameraSample;
+use crate::integrator::{CameraSample, Traced};
 use crate::path::{PathIntegrator, PathState, PathStats, PendingShadow};
 use glam::Vec2;
 use radia_math::Spectrum;
@@ -27,6 +27,8 @@ struct Lane<'a, S> {
     stream: SampleStream<'a, S>,
     path: PathState,
     shadow: Option<PendingShadow>,
+    /// Rays traced so far.
+    rays: u32,
 }
 
 /// [`crate::integrator::Integrator::li_many`] of the path integrator.
@@ -34,7 +36,7 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
     integrator: &PathIntegrator,
     scene: &Scene,
     mut samples: impl Iterator<Item = CameraSample<'a, S>>,
-    out: &mut [(Vec2, Spectrum)],
+    out: &mut [Traced],
     stats: &mut PathStats,
 ) {
     let mut lanes: [Option<Lane<'a, S>>; LANES] = std::array::from_fn(|_| None);
@@ -65,6 +67,7 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
                 stream: cs.stream,
                 path: PathState::UNSTARTED,
                 shadow: None,
+                rays: 0,
             });
         }
         let camera_rays = (fresh != 0).then(|| scene.camera.generate_rays(&films));
@@ -78,7 +81,11 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
                 Some(path) => lane.path = path,
                 None => {
                     // max_depth 0: nothing is seen.
-                    out[lane.slot] = (lane.pos, Spectrum::ZERO);
+                    out[lane.slot] = Traced {
+                        pos: lane.pos,
+                        l: Spectrum::ZERO,
+                        rays: 0,
+                    };
                     lanes[k] = None;
                 }
             }
@@ -89,9 +96,10 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
 
         // ---- Closest hits, all lanes at once ----
         rays.active = 0;
-        for (k, lane) in lanes.iter().enumerate() {
+        for (k, lane) in lanes.iter_mut().enumerate() {
             if let Some(lane) = lane {
                 rays.set(k, &lane.path.ray);
+                lane.rays += 1;
             }
         }
         stats.rays += u64::from(rays.active.count_ones());
@@ -101,6 +109,9 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         let mut goes_on = [false; LANES];
         for (k, lane) in lanes.iter_mut().enumerate() {
             if let Some(lane) = lane {
+                // Its rays as `li` counts them: the closest hit (above), and those the
+                // bounce traces or will (shadow ray, emitters skipped).
+                let before = stats.rays;
                 goes_on[k] = integrator.bounce(
                     scene,
                     &mut lane.path,
@@ -109,6 +120,7 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
                     stats,
                     &mut lane.shadow,
                 );
+                lane.rays += (stats.rays - before) as u32;
             }
         }
 
@@ -140,7 +152,11 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         for (k, slot) in lanes.iter_mut().enumerate() {
             if !goes_on[k] {
                 if let Some(lane) = slot.take() {
-                    out[lane.slot] = (lane.pos, lane.path.result);
+                    out[lane.slot] = Traced {
+                        pos: lane.pos,
+                        l: lane.path.result,
+                        rays: lane.rays,
+                    };
                 }
             }
         }

@@ -78,6 +78,7 @@ fn packets_of_paths_render_what_one_path_at_a_time_renders() {
                 spp: PASS_SPP,
                 seed: SEED,
                 sampler,
+                adaptive: false,
             };
             let out = render(&scene, &options, &AtomicBool::new(false), &|_| {});
             assert_eq!(out.stats.spp, PASS_SPP);

@@ -48,6 +48,7 @@ pub fn render_xml(name: &str, xml: &str, spp: u32, seed: u64) -> RenderOutput {
         spp,
         seed,
         sampler: SamplerKind::Independent,
+        adaptive: false,
     };
     render(&scene, &options, &AtomicBool::new(false), &|_| {})
 }

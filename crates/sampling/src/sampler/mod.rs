@@ -182,6 +182,14 @@ impl SamplerKind {
         }
     }
 
+    /// Whether every prefix of a pixel's samples is a good set on its own (samples may be
+    /// taken one at a time, as many as wanted), not only the whole `sample_count` the
+    /// sequence is stratified over: `independent` and `sobol` (whose prefixes of any length
+    /// are Owen-scrambled Sobol points). Adaptive sampling needs it.
+    pub fn progressive(&self) -> bool {
+        matches!(self, SamplerKind::Independent | SamplerKind::Sobol)
+    }
+
     /// The kind with default parameters named `name`, if there is one.
     pub fn from_name(name: &str) -> Option<Self> {
         Some(match name {
