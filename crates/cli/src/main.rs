@@ -63,8 +63,8 @@ enum Command {
         /// Adaptive sampling: --spp becomes the average per pixel. A pilot pass of a quarter
         /// of it measures the noise; the rest goes where it lowers the relative error most,
         /// each pixel's count made from its neighbours' noise only, so the image stays
-        /// unbiased. Needs the independent or sobol sampler and the box filter (else the
-        /// samples are spread evenly, with a warning).
+        /// unbiased. Needs the independent or sobol sampler (else the samples are spread
+        /// evenly, with a warning); under a wide filter samples are placed by the filter.
         #[arg(long)]
         adaptive: bool,
         /// Film size (overrides the scene's film): WIDTHxHEIGHT, or one number for a square.
@@ -369,7 +369,7 @@ fn run_render(command: Command) -> Result<ExitCode, String> {
             } else if spp.is_none() && time_budget.is_some() {
                 Some("a time budget without --spp has no average to adapt (give --spp)".to_string())
             } else {
-                radia_render::adaptive_unsupported(sampler, scene.film.filter, rounded)
+                radia_render::adaptive_unsupported(sampler, rounded)
             };
             if let Some(why) = &why {
                 eprintln!("radia: warning: adaptive sampling is off: {why}");

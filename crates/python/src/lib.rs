@@ -247,8 +247,8 @@ fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
 /// ``seed`` is the seed of the sample sequences (0, as ``mi.render``); ``threads`` defaults to
 /// all cores; ``sampler`` overrides the scene's sampler by name, as ``radia render
 /// --sampler``; ``adaptive=True`` spends ``spp`` as an average, where a pilot pass found
-/// noise, as ``radia render --adaptive`` (independent or sobol sampler and box filter only;
-/// else a warning and even sampling). With ``stats=True`` the result comes as ``(result, RenderStats)``: the rays,
+/// noise, as ``radia render --adaptive`` (independent or sobol sampler only; else a warning
+/// and even sampling). With ``stats=True`` the result comes as ``(result, RenderStats)``: the rays,
 /// samples and dropped NaN/Inf samples the CLI reports. The GIL is released while rendering;
 /// Ctrl-C stops the render and raises ``KeyboardInterrupt``.
 #[pyfunction]
@@ -336,7 +336,7 @@ fn render_result(
     let why_not = if samples.is_some() {
         Some("a part of a split render samples evenly".to_string())
     } else {
-        radia_render::adaptive_unsupported(sampler, scene.scene.film.filter, rounded)
+        radia_render::adaptive_unsupported(sampler, rounded)
     };
     if let (true, Some(why)) = (adaptive, &why_not) {
         warn(py, &format!("adaptive sampling is off: {why}"))?;

@@ -25,9 +25,10 @@
 //!
 //! The samples of one pixel are the first n of its sequence, so only samplers whose every
 //! prefix is a good set qualify: `independent` and `sobol` ([`SamplerKind::progressive`]),
-//! not those stratified over a fixed count. A sample goes to its own pixel only under the
-//! box filter; a wider filter mixes the pixels whose counts were made from each other, so
-//! the renderer samples evenly there.
+//! not those stratified over a fixed count. Each sample must count in its own pixel only
+//! (splatting it into the neighbours, whose counts were made from this pixel's pilot, would
+//! undo the argument above), so under a filter wider than a pixel the renderer places the
+//! samples by the filter instead (`crate::film::FilterSampler`).
 
 use radia_math::Spectrum;
 

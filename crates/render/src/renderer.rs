@@ -13,14 +13,14 @@
 use crate::adaptive::{self, PilotStats};
 use crate::aov::{AovFilm, AovIntegrator, AovLayers};
 use crate::classic::ClassicIntegrator;
-use crate::film::{Film, Filter, Image};
+use crate::film::{Film, Filter, FilterSampler, Image};
 use crate::integrator::{CameraSample, Integrator, Traced};
 use crate::npr::NprIntegrator;
 use crate::path::{layout, PathIntegrator, PathStats};
 use glam::{UVec2, Vec2};
 use radia_math::{Ray, Spectrum};
 use radia_sampling::{with_sampler, AnySampler, PixelKey, SampleStream, Sampler, SamplerKind};
-use radia_scene::{AovDesc, FilterDesc, Scene};
+use radia_scene::{AovDesc, Scene};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
@@ -50,17 +50,15 @@ pub struct RenderOptions {
     pub adaptive: bool,
 }
 
-/// Why adaptive sampling cannot be used with `sampler`, the film's `filter` and a budget
-/// of `spp`, if it cannot (see [`crate::adaptive`]).
-pub fn adaptive_unsupported(sampler: SamplerKind, filter: FilterDesc, spp: u32) -> Option<String> {
+/// Why adaptive sampling cannot be used with `sampler` and a budget of `spp`, if it cannot
+/// (see [`crate::adaptive`]).
+pub fn adaptive_unsupported(sampler: SamplerKind, spp: u32) -> Option<String> {
     if !sampler.progressive() {
         Some(format!(
             "the {} sampler is stratified over its whole sample count (adaptive sampling \
              needs independent or sobol)",
             sampler.name()
         ))
-    } else if filter != FilterDesc::Box {
-        Some("a filter wider than a pixel mixes the pixels' counts (adaptive sampling needs the box filter: --rfilter box)".into())
     } else if adaptive::pilot_spp(spp).is_none() {
         Some(format!("{spp} spp are too few to adapt (at least 8)"))
     } else {
@@ -230,11 +228,9 @@ pub fn render_part_with_aovs(
     // Adaptive sampling takes whole renders only (a part's counts would come from its own
     // pilot, and the parts of one image would not agree).
     let whole = samples.start == 0 && end == sampler.sample_count();
-    let pilot = (options.adaptive
-        && whole
-        && adaptive_unsupported(options.sampler, scene.film.filter, end).is_none())
-    .then(|| adaptive::pilot_spp(end))
-    .flatten();
+    let pilot = (options.adaptive && whole && adaptive_unsupported(options.sampler, end).is_none())
+        .then(|| adaptive::pilot_spp(end))
+        .flatten();
     let job = Job {
         scene,
         sampler: &sampler,
@@ -392,6 +388,8 @@ struct TileSamples<'a, S> {
     x1: u32,
     y1: u32,
     pass: PassSamples<'a>,
+    /// Adaptive sampling: film positions drawn by the filter, each sample its pixel's only.
+    fis: Option<&'a FilterSampler>,
     /// The next sample: pixel (x, y), index s (the pixel's end), and the pixel's key.
     x: u32,
     y: u32,
@@ -409,6 +407,7 @@ impl<'a, S: Sampler> TileSamples<'a, S> {
         (x0, y0): (u32, u32),
         (w, h): (u32, u32),
         pass: PassSamples<'a>,
+        fis: Option<&'a FilterSampler>,
     ) -> Self {
         Self {
             scene,
@@ -420,6 +419,7 @@ impl<'a, S: Sampler> TileSamples<'a, S> {
             s: pass.range(x0, y0).0,
             s_end: pass.range(x0, y0).1,
             pass,
+            fis,
             x: x0,
             y: y0,
             key: PixelKey::new(seed, UVec2::new(x0, y0)),
@@ -450,7 +450,15 @@ impl<'a, S: Sampler> Iterator for TileSamples<'a, S> {
         let (x, y) = (self.x, self.y);
         let mut stream = SampleStream::new(self.sampler, self.key, self.s);
         stream.seek(layout::FILM);
-        let pos = Vec2::new(x as f32, y as f32) + stream.next_2d();
+        let u = stream.next_2d();
+        let pos = match self.fis {
+            // (The box filter's offsets, u − ½ from the centre, as even sampling has them.)
+            Some(fis) if !fis.is_box() => {
+                Vec2::new(x as f32 + 0.5, y as f32 + 0.5)
+                    + Vec2::new(fis.sample(u.x).0, fis.sample(u.y).0)
+            }
+            _ => Vec2::new(x as f32, y as f32) + u,
+        };
         let size = &self.scene.film;
         let film = pos / Vec2::new(size.width as f32, size.height as f32);
         self.s += 1;
@@ -495,6 +503,7 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
     // takes the same share of every pixel's remaining samples (so that the passes are as
     // long as even ones and a stop between two leaves every pixel the same fraction).
     let block = pilot.map(adaptive::block_size).unwrap_or(1);
+    let fis = pilot.map(|_| FilterSampler::new(filter));
     let mut pilot_stats = pilot.map(|_| PilotStats::new(w, h, block));
     let mut counts: Option<Vec<u32>> = None;
     let (mut share, mut shares) = (0u32, 0u32);
@@ -552,8 +561,26 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
                 let mut tile_extras = extras.film(fx, fy, fw, fh, filter);
                 let mut pstats = PathStats::default();
                 let mut invalid = 0;
-                let samples =
-                    TileSamples::new(scene, sampler, seed, (x0, y0), (tw, th), pass.clone());
+                let samples = TileSamples::new(
+                    scene,
+                    sampler,
+                    seed,
+                    (x0, y0),
+                    (tw, th),
+                    pass.clone(),
+                    fis.as_ref(),
+                );
+                // Adaptive sampling counts each sample in its own pixel only (`FilterSampler`).
+                let add = |film: &mut Film, (px, py): (u32, u32), pos: Vec2, l: Spectrum| match &fis
+                {
+                    None => film.add_sample(pos, l),
+                    Some(fis) => {
+                        let (x, y) = (x0 + px, y0 + py);
+                        let off = pos - Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                        let w = fis.weight(off.x) * fis.weight(off.y);
+                        film.add_to_pixel(x, y, l, w);
+                    }
+                };
                 if E::PER_SAMPLE {
                     // One sample at a time, with its extras beside it.
                     for mut cs in samples {
@@ -571,7 +598,7 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
                             stats.add(px, py, l, (pstats.rays - before) as u32);
                         }
                         if l.is_finite() {
-                            tile_film.add_sample(pos, l);
+                            add(&mut tile_film, (px, py), pos, l);
                         } else {
                             invalid += 1;
                         }
@@ -583,15 +610,21 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
                     let mut out = vec![Traced::EMPTY; n as usize];
                     integrator.li_many(scene, samples, &mut out, &mut pstats);
                     for t in &out {
-                        if t.l.is_finite() {
-                            tile_film.add_sample(t.pos, t.l);
-                        } else {
+                        if !t.l.is_finite() {
                             invalid += 1;
+                        } else if fis.is_none() {
+                            tile_film.add_sample(t.pos, t.l);
                         }
                     }
-                    if let Some(stats) = &mut tile_pilot {
-                        for (t, (px, py)) in out.iter().zip(sample_pixels) {
-                            stats.add(px, py, t.l, t.rays);
+                    if fis.is_some() {
+                        // The loop above added nothing (see there).
+                        for (t, pixel) in out.iter().zip(sample_pixels) {
+                            if let Some(stats) = &mut tile_pilot {
+                                stats.add(pixel.0, pixel.1, t.l, t.rays);
+                            }
+                            if t.l.is_finite() {
+                                add(&mut tile_film, pixel, t.pos, t.l);
+                            }
                         }
                     }
                 }

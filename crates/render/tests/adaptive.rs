@@ -122,7 +122,7 @@ fn adaptive_renders_converge_to_the_even_image() {
 }
 
 #[test]
-fn samplers_stratified_over_their_count_and_wide_filters_sample_evenly() {
+fn samplers_stratified_over_their_count_sample_evenly() {
     let scene = load();
     // Multijitter is stratified over the whole count: adaptive is refused, the render is
     // the even one bit for bit.
@@ -141,28 +141,50 @@ fn samplers_stratified_over_their_count_and_wide_filters_sample_evenly() {
         false,
     );
     assert_eq!(a.image, e.image);
-    assert!(radia_render::adaptive_unsupported(
-        SamplerKind::Multijitter { jitter: true },
-        radia_scene::FilterDesc::Box,
-        64
-    )
-    .is_some());
-    assert!(radia_render::adaptive_unsupported(
-        SamplerKind::Sobol,
-        radia_scene::FilterDesc::Gaussian { stddev: 0.5 },
-        64
-    )
-    .is_some());
-    assert!(radia_render::adaptive_unsupported(
-        SamplerKind::Sobol,
-        radia_scene::FilterDesc::Box,
-        4
-    )
-    .is_some());
-    assert!(radia_render::adaptive_unsupported(
-        SamplerKind::Sobol,
-        radia_scene::FilterDesc::Box,
-        64
-    )
-    .is_none());
+    let why = |s, spp| radia_render::adaptive_unsupported(s, spp);
+    assert!(why(SamplerKind::Multijitter { jitter: true }, 64).is_some());
+    assert!(why(SamplerKind::Stratified { jitter: true }, 64).is_some());
+    assert!(why(SamplerKind::Sobol, 4).is_some());
+    assert!(why(SamplerKind::Sobol, 64).is_none());
+    assert!(why(SamplerKind::Independent, 64).is_none());
+}
+
+#[test]
+fn with_a_gaussian_filter_adaptive_renders_converge_to_the_splatted_image() {
+    // Filter importance sampling puts each sample in its own pixel; in expectation the image
+    // is the splatted one.
+    let xml = scene_xml().replace(
+        r#"<rfilter type="box"/>"#,
+        r#"<rfilter type="gaussian"><float name="stddev" value="0.5"/></rfilter>"#,
+    );
+    assert!(xml.contains("gaussian"));
+    let path = write_scene("adaptive-gaussian", &xml);
+    let scene = Scene::build(load_mitsuba_xml(&path, &[]).unwrap_or_else(|e| panic!("{e}")));
+    let n = 24u64;
+    let mean = |adaptive: bool| -> Vec<f64> {
+        let mut sum = vec![0.0f64; 24 * 16];
+        for seed in 0..n {
+            let out = render_with(&scene, SamplerKind::Independent, 32, 500 + seed, adaptive);
+            for (s, p) in sum.iter_mut().zip(&out.image.pixels) {
+                *s += (p.x + p.y + p.z) as f64 / n as f64;
+            }
+        }
+        sum
+    };
+    let (a, e) = (mean(true), mean(false));
+    for by in 0..4 {
+        for bx in 0..6 {
+            let block = |img: &[f64]| -> f64 {
+                (0..16)
+                    .map(|k| img[(by * 4 + k / 4) * 24 + bx * 4 + k % 4])
+                    .sum::<f64>()
+                    / 16.0
+            };
+            let (va, ve) = (block(&a), block(&e));
+            assert!(
+                (va - ve).abs() <= 0.08 * ve.max(0.05),
+                "block ({bx}, {by}): adaptive {va} against splatted {ve}"
+            );
+        }
+    }
 }
