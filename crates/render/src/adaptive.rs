@@ -31,6 +31,7 @@
 //! samples by the filter instead (`crate::film::FilterSampler`).
 
 use radia_math::Spectrum;
+use rayon::prelude::*;
 
 /// The most samples one pixel gets, in multiples of the average asked for.
 pub const MAX_SPP_FACTOR: u32 = 16;
@@ -72,7 +73,8 @@ pub struct PilotStats {
     /// Blocks per pixel.
     blocks: Vec<u32>,
     /// The block being filled per pixel: its sum, samples seen and finite samples (dropped
-    /// samples count nowhere).
+    /// samples count nowhere). Made by the first [`PilotStats::add`]: the image's statistics,
+    /// which only merge tiles', need none.
     open: Vec<([f32; 3], u32, u32)>,
     /// Samples and the rays they traced, per pixel (the cost of a sample).
     samples: Vec<u32>,
@@ -89,7 +91,7 @@ impl PilotStats {
             block,
             sums: vec![[0.0; 6]; n],
             blocks: vec![0; n],
-            open: vec![([0.0; 3], 0, 0); n],
+            open: Vec::new(),
             samples: vec![0; n],
             rays: vec![0; n],
         }
@@ -100,6 +102,9 @@ impl PilotStats {
     #[inline]
     pub fn add(&mut self, x: u32, y: u32, l: Spectrum, rays: u32) {
         let i = (y * self.width + x) as usize;
+        if self.open.is_empty() {
+            self.open = vec![([0.0; 3], 0, 0); self.samples.len()];
+        }
         self.samples[i] += 1;
         self.rays[i] += rays as u64;
         let (sum, seen, finite) = &mut self.open[i];
@@ -232,11 +237,23 @@ pub fn allocate(stats: &PilotStats, pilot: u32, spp: u32) -> Vec<u32> {
             continue;
         }
         let budget = spp as f64 * pixels.len() as f64;
-        let total = |c: f64| -> f64 { pixels.iter().map(|&i| (c * noise[i]).clamp(lo, hi)).sum() };
-        // The total grows with c from pilot · n to (at most) the cap · n: bisect for the
-        // budget (on a log scale: c spans many orders of magnitude).
-        let (mut a, mut b) = (1e-30f64, 1e30f64);
-        for _ in 0..200 {
+        // Summed in fixed chunks, in parallel, then in order: the same total whatever the
+        // thread count (the image must not depend on it).
+        let total = |c: f64| -> f64 {
+            let parts: Vec<f64> = pixels
+                .par_chunks(1 << 14)
+                .map(|chunk| chunk.iter().map(|&i| (c * noise[i]).clamp(lo, hi)).sum())
+                .collect();
+            parts.iter().sum()
+        };
+        // The total grows with c from the pilot's alone (c · max noise ≤ pilot) to every
+        // noisy pixel at the cap (c · min noise ≥ cap): bisect for the budget between, on a
+        // log scale.
+        let positive = || pixels.iter().map(|&i| noise[i]).filter(|&n| n > 0.0);
+        let max = positive().fold(0.0f64, f64::max);
+        let min = positive().fold(f64::INFINITY, f64::min);
+        let (mut a, mut b) = (lo / max, hi / min);
+        for _ in 0..64 {
             let mid = (a * b).sqrt();
             if total(mid) > budget {
                 b = mid;
