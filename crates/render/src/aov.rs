@@ -186,6 +186,21 @@ impl AovFilm {
         }
     }
 
+    /// Adds the values `v` with weight `w` to pixel (`x`, `y`) (full-image coordinates)
+    /// alone, as [`crate::Film::add_to_pixel`].
+    pub fn add_to_pixel(&mut self, x: u32, y: u32, v: &[f32], w: f32) {
+        let (x, y) = (x as i32 - self.x0, y as i32 - self.y0);
+        if x >= 0 && y >= 0 && (x as u32) < self.width && (y as u32) < self.height {
+            let stride = self.stride();
+            let i = (y as usize * self.width as usize + x as usize) * stride;
+            let px = &mut self.data[i..i + stride];
+            for (acc, val) in px.iter_mut().zip(v) {
+                *acc += w * val;
+            }
+            px[self.channels] += w;
+        }
+    }
+
     /// The pixels it covers.
     pub fn rect(&self) -> PixelRect {
         PixelRect::new(self.x0, self.y0, self.width, self.height)

@@ -430,11 +430,6 @@ mod tests {
         assert_eq!(img.get(3, 2), Spectrum::ONE);
         assert_eq!(img.get(0, 0), Spectrum::ZERO);
     }
-}
-
-#[cfg(test)]
-mod filter_sampling_tests {
-    use super::*;
 
     #[test]
     fn filter_importance_sampling_weights_integrate_the_filter() {

@@ -292,7 +292,16 @@ trait Extras: Sync {
     fn film(&self, x0: i32, y0: i32, w: u32, h: u32, filter: Filter) -> Self::Film;
     /// False when the image is not rendered (an `aov` integrator with no nested one).
     fn beauty(&self) -> bool;
-    fn add(&self, scene: &Scene, film: &mut Self::Film, pos: Vec2, ray: &Ray);
+    /// The sample at film position `pos` is splatted by the filter, or with `pixel`
+    /// (adaptive sampling: x, y, weight) counted in that pixel alone.
+    fn add(
+        &self,
+        scene: &Scene,
+        film: &mut Self::Film,
+        pos: Vec2,
+        pixel: Option<(u32, u32, f32)>,
+        ray: &Ray,
+    );
     fn merge(into: &mut Self::Film, tile: &Self::Film);
 }
 
@@ -309,7 +318,7 @@ impl Extras for NoExtras {
         true
     }
     #[inline(always)]
-    fn add(&self, _: &Scene, _: &mut (), _: Vec2, _: &Ray) {}
+    fn add(&self, _: &Scene, _: &mut (), _: Vec2, _: Option<(u32, u32, f32)>, _: &Ray) {}
     #[inline(always)]
     fn merge(_: &mut (), _: &()) {}
 }
@@ -325,9 +334,19 @@ impl Extras for AovIntegrator<'_> {
     fn beauty(&self) -> bool {
         self.has_beauty()
     }
-    fn add(&self, scene: &Scene, (film, values): &mut Self::Film, pos: Vec2, ray: &Ray) {
+    fn add(
+        &self,
+        scene: &Scene,
+        (film, values): &mut Self::Film,
+        pos: Vec2,
+        pixel: Option<(u32, u32, f32)>,
+        ray: &Ray,
+    ) {
         self.sample(scene, ray, values);
-        film.add_sample(pos, values);
+        match pixel {
+            None => film.add_sample(pos, values),
+            Some((x, y, w)) => film.add_to_pixel(x, y, values, w),
+        }
     }
     fn merge(into: &mut Self::Film, tile: &Self::Film) {
         into.0.merge(&tile.0);
@@ -571,29 +590,34 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
                     fis.as_ref(),
                 );
                 // Adaptive sampling counts each sample in its own pixel only (`FilterSampler`).
-                let add = |film: &mut Film, (px, py): (u32, u32), pos: Vec2, l: Spectrum| match &fis
-                {
-                    None => film.add_sample(pos, l),
-                    Some(fis) => {
+                // Adaptive sampling counts each sample in its own pixel only (`FilterSampler`):
+                // the pixel and weight of a sample of tile pixel (px, py) at `pos`.
+                let own = |(px, py): (u32, u32), pos: Vec2| {
+                    fis.as_ref().map(|fis| {
                         let (x, y) = (x0 + px, y0 + py);
                         let off = pos - Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                        let w = fis.weight(off.x) * fis.weight(off.y);
-                        film.add_to_pixel(x, y, l, w);
-                    }
+                        (x, y, fis.weight(off.x) * fis.weight(off.y))
+                    })
+                };
+                let add = |film: &mut Film, pixel: (u32, u32), pos: Vec2, l: Spectrum| match own(
+                    pixel, pos,
+                ) {
+                    None => film.add_sample(pos, l),
+                    Some((x, y, w)) => film.add_to_pixel(x, y, l, w),
                 };
                 if E::PER_SAMPLE {
                     // One sample at a time, with its extras beside it.
                     for mut cs in samples {
                         let (pos, ray) = (cs.pos, cs.ray(scene));
                         let stream = &mut cs.stream;
-                        extras.add(scene, &mut tile_extras, pos, &ray);
+                        let (px, py) = sample_pixels.next().expect("one pixel per sample");
+                        extras.add(scene, &mut tile_extras, pos, own((px, py), pos), &ray);
                         let before = pstats.rays;
                         let l = if extras.beauty() {
                             integrator.li(scene, ray, pos, stream, &mut pstats)
                         } else {
                             Spectrum::ZERO
                         };
-                        let (px, py) = sample_pixels.next().expect("one pixel per sample");
                         if let Some(stats) = &mut tile_pilot {
                             stats.add(px, py, l, (pstats.rays - before) as u32);
                         }
