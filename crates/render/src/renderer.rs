@@ -428,6 +428,7 @@ impl<'a, S: Sampler> TileSamples<'a, S> {
         pass: PassSamples<'a>,
         fis: Option<&'a FilterSampler>,
     ) -> Self {
+        let (s, s_end) = pass.range(x0, y0);
         Self {
             scene,
             sampler,
@@ -435,8 +436,8 @@ impl<'a, S: Sampler> TileSamples<'a, S> {
             x0,
             x1: x0 + w,
             y1: y0 + h,
-            s: pass.range(x0, y0).0,
-            s_end: pass.range(x0, y0).1,
+            s,
+            s_end,
             pass,
             fis,
             x: x0,
@@ -526,9 +527,10 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
     let mut pilot_stats = pilot.map(|_| PilotStats::new(w, h, block));
     let mut counts: Option<Vec<u32>> = None;
     let (mut share, mut shares) = (0u32, 0u32);
+    // Where the passes of the same indices for every pixel end: the pilot's or the render's.
+    let even_end = pilot.unwrap_or(samples.end);
     let mut spp_start = samples.start;
     loop {
-        let even_end = pilot.unwrap_or(samples.end);
         if counts.is_none() && spp_start >= even_end {
             match (pilot, &pilot_stats) {
                 (Some(pilot), Some(gathered)) => {
@@ -589,7 +591,6 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
                     pass.clone(),
                     fis.as_ref(),
                 );
-                // Adaptive sampling counts each sample in its own pixel only (`FilterSampler`).
                 // Adaptive sampling counts each sample in its own pixel only (`FilterSampler`):
                 // the pixel and weight of a sample of tile pixel (px, py) at `pos`.
                 let own = |(px, py): (u32, u32), pos: Vec2| {

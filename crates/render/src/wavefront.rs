@@ -12,7 +12,6 @@
 use crate::integrator::{CameraSample, Traced};
 use crate::path::{PathIntegrator, PathState, PathStats, PendingShadow};
 use glam::Vec2;
-use radia_math::Spectrum;
 use radia_sampling::{SampleStream, Sampler};
 use radia_scene::{RayPacket, Scene, ShadowLanes, SurfaceInteraction, PACKET_LANES};
 
@@ -83,8 +82,7 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
                     // max_depth 0: nothing is seen.
                     out[lane.slot] = Traced {
                         pos: lane.pos,
-                        l: Spectrum::ZERO,
-                        rays: 0,
+                        ..Traced::EMPTY
                     };
                     lanes[k] = None;
                 }
