@@ -172,18 +172,19 @@ impl ChildBounds {
         }
     }
 
-    /// Probabilities of descending into each of the first `count` children from (`p`, `n`):
-    /// by importance, or by power where none has any (0 beyond `count`).
+    /// The weights of the first `count` children from (`p`, `n`) and their sum: the
+    /// importances, or the powers where none has any importance (0 beyond `count`). Each
+    /// child's probability is its weight over the sum.
     #[inline]
-    fn probabilities(&self, p: Vec3, n: Vec3, count: usize) -> [f32; WIDTH] {
+    fn weights(&self, p: Vec3, n: Vec3, count: usize) -> ([f32; WIDTH], f32) {
         let mut c = self.importance(p, n).to_array();
         c[count..].fill(0.0);
-        let mut sum: f32 = c.iter().sum();
-        if !(sum > 0.0 && sum.is_finite()) {
-            c = self.phi;
-            sum = c.iter().sum();
+        let sum: f32 = c[..count].iter().sum();
+        if sum > 0.0 && sum.is_finite() {
+            (c, sum)
+        } else {
+            (self.phi, self.phi[..count].iter().sum())
         }
-        (f32x8::new(c) / f32x8::splat(sum)).to_array()
     }
 
     /// pbrt-v4's `CompactLightBounds::Importance` of every child at point `p` with shading
@@ -226,7 +227,7 @@ impl ChildBounds {
         let cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, cos_o);
         let sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, cos_o);
         let cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
-        let mut importance = phi * cos_p / dc2;
+        let mut importance = phi * cos_p * (inv * inv);
         if n != Vec3::ZERO {
             let cos_i = (wi[0] * n.x + wi[1] * n.y + wi[2] * n.z).abs();
             let sin_i = safe_sqrt8(one - cos_i * cos_i);
@@ -563,19 +564,20 @@ impl LightBvh {
             let k = if count == 1 {
                 0
             } else {
-                let probs = node.children.probabilities(p, n, count);
-                // The child whose interval of the running sum holds u; past the end (by
-                // round-off), the last one with a chance.
+                let (c, sum) = node.children.weights(p, n, count);
+                // The child whose interval of the running sum of the weights holds u · sum;
+                // past the end (by round-off), the last one with a chance.
+                let mut t = u * sum;
                 let mut k = 0;
-                while k + 1 < count && !(u < probs[k]) {
-                    u -= probs[k];
+                while k + 1 < count && !(t < c[k]) {
+                    t -= c[k];
                     k += 1;
                 }
-                while probs[k] == 0.0 && k > 0 {
+                while c[k] == 0.0 && k > 0 {
                     k -= 1;
                 }
-                u = (u / probs[k]).clamp(0.0, ONE_MINUS_EPSILON);
-                pmf *= probs[k];
+                u = (t / c[k]).clamp(0.0, ONE_MINUS_EPSILON);
+                pmf *= c[k] / sum;
                 k
             };
             let child = node.child[k];
@@ -601,7 +603,8 @@ impl LightBvh {
         loop {
             let nd = &self.nodes[node as usize];
             if nd.count > 1 {
-                pmf *= nd.children.probabilities(p, n, nd.count as usize)[slot as usize];
+                let (c, sum) = nd.children.weights(p, n, nd.count as usize);
+                pmf *= c[slot as usize] / sum;
             }
             if node == 0 {
                 return pmf;
