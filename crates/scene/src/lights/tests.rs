@@ -973,6 +973,49 @@ fn one_light_needs_no_selection() {
     assert!(s.lights.is_empty());
 }
 
+#[test]
+fn a_lone_emitting_mesh_is_chosen_from_by_the_tree_and_a_rectangle_by_area() {
+    // A cube seen from below its −y face: with the default sampler the tree never picks the
+    // +y face, turned right away (its bounds are conservative: the side faces, seen at a
+    // grazing angle, keep a little), and the −y face gets most of it.
+    let ctx = LightContext {
+        p: Vec3::new(0.0, -3.0, 0.0),
+        n: Vec3::Y,
+    };
+    let s = scene(
+        vec![emitting(cube(Vec3::ZERO, Vec3::splat(0.5)), Vec3::ONE)],
+        vec![],
+        LightSamplerKind::Bvh,
+    );
+    let pmf: Vec<f32> = (0..12).map(|i| s.lights.pmf(&ctx, i)).collect();
+    // Quads −z, +z, −y, +y, −x, +x in order, two triangles each.
+    assert_eq!((pmf[6], pmf[7]), (0.0, 0.0), "{pmf:?}");
+    assert!(pmf[4] + pmf[5] > 0.7, "{pmf:?}");
+    assert!((pmf.iter().sum::<f32>() - 1.0).abs() < 1e-5, "{pmf:?}");
+    // Asked for, Mitsuba's choice: by area.
+    let s = scene(
+        vec![emitting(cube(Vec3::ZERO, Vec3::splat(0.5)), Vec3::ONE)],
+        vec![],
+        LightSamplerKind::Uniform,
+    );
+    for i in 0..12 {
+        assert!((s.lights.pmf(&ctx, i) - 1.0 / 12.0).abs() < 1e-6);
+    }
+    // A lone rectangle: by area whatever the sampler, from anywhere.
+    let s = scene(
+        vec![emitting(rectangle(1.0), Vec3::ONE)],
+        vec![],
+        LightSamplerKind::Bvh,
+    );
+    let near = LightContext {
+        p: Vec3::new(0.9, 0.9, 0.1),
+        n: -Vec3::Z,
+    };
+    for i in 0..2 {
+        assert_eq!(s.lights.pmf(&near, i), 0.5);
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // Delta lights: values against closed forms
 
