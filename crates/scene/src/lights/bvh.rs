@@ -25,17 +25,18 @@
 //!   chosen then contributes nothing, exactly as no light would;
 //! * the probability of a chosen leaf is recomputed by walking up through parent links
 //!   rather than down a bit trail, so the depth is not limited to 32;
-//! * the binary tree pbrt-v4 builds is collapsed into nodes of up to eight children (the
-//!   frontier found by opening the subtree of most power first), weighed by one 8-wide
-//!   importance: the walk down is a third as long, and each choice is made among finer
+//! * the binary tree pbrt-v4 builds is collapsed into nodes of up to sixteen children (the
+//!   frontier found by opening the subtree of most power first), weighed by one 16-wide
+//!   importance: the walk down is a quarter as long, and each choice is made among finer
 //!   clusters, so it follows each light's own importance more closely (64 small lights,
-//!   `scenes/many-lights.xml`: 1.5× less relMSE at equal spp than the binary tree).
+//!   `scenes/many-lights.xml`: 1.6× less relMSE at equal spp than the binary tree; eight
+//!   children gave 1.5×).
 
 use crate::emitter::Emitter;
 use crate::shape::{Shape, ShapeKind};
 use glam::Vec3;
 use radia_math::{safe_acos, safe_sqrt, PI};
-use wide::f32x8;
+use wide::f32x16;
 
 /// What a subtree of lights can send towards a point (pbrt-v4's `LightBounds`).
 #[derive(Clone, Copy, Debug)]
@@ -121,12 +122,13 @@ impl NodeBounds {
     }
 }
 
-/// The bounds of an interior node's children (up to [`WIDTH`]), field by field in lanes
-/// (unused lanes zero, and masked out), so that all the children's importances are one chain
-/// of 8-wide operations. A binary tree weighed two children per level, and walking down it
-/// was a chain of levels, each a square root and divisions behind a data-dependent branch (a
-/// fifth of the Veach MIS scene's render time as two scalar chains per level, a tenth of
-/// most scenes' as one 4-wide chain); eight children per level make the walk a third as long.
+/// The bounds of a node's children (up to [`WIDTH`]), field by field in lanes (unused
+/// lanes zero, and masked out), so that all the children's importances are one chain of
+/// 16-wide operations (two 8-wide ones without AVX-512). A binary tree weighed two children
+/// per level, and walking down it was a chain of levels, each a square root and divisions
+/// behind a data-dependent branch (a fifth of the Veach MIS scene's render time as two scalar
+/// chains per level, a tenth of most scenes' as one 4-wide chain); sixteen children per level
+/// make the walk a quarter as long.
 #[derive(Clone, Copy, Debug, Default)]
 struct ChildBounds {
     center: [[f32; WIDTH]; 3],
@@ -142,8 +144,8 @@ struct ChildBounds {
 
 /// The lanes of a child field.
 #[inline(always)]
-fn lanes(v: [f32; WIDTH]) -> f32x8 {
-    f32x8::new(v)
+fn lanes(v: [f32; WIDTH]) -> f32x16 {
+    f32x16::new(v)
 }
 
 impl ChildBounds {
@@ -194,12 +196,12 @@ impl ChildBounds {
     /// Branches become lane selects; each lane's operations are the scalar formula's, in its
     /// order.
     #[inline]
-    fn importance(&self, p: Vec3, n: Vec3) -> f32x8 {
-        let (zero, one) = (f32x8::splat(0.0), f32x8::splat(1.0));
+    fn importance(&self, p: Vec3, n: Vec3) -> f32x16 {
+        let (zero, one) = (f32x16::splat(0.0), f32x16::splat(1.0));
         let d = [
-            f32x8::splat(p.x) - lanes(self.center[0]),
-            f32x8::splat(p.y) - lanes(self.center[1]),
-            f32x8::splat(p.z) - lanes(self.center[2]),
+            f32x16::splat(p.x) - lanes(self.center[0]),
+            f32x16::splat(p.y) - lanes(self.center[1]),
+            f32x16::splat(p.z) - lanes(self.center[2]),
         ];
         let dc2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         let radius = lanes(self.radius);
@@ -208,7 +210,7 @@ impl ChildBounds {
         // Inside the bounding sphere every direction is possible: θ' = θ'ᵢ = 0.
         let inside = dc2.simd_le(r2);
         let inside_importance = cos_e.simd_lt(one).select(
-            (phi / r2.max(f32x8::splat(1e-20))).min(f32x8::splat(f32::MAX)),
+            (phi / r2.max(f32x16::splat(1e-20))).min(f32x16::splat(f32::MAX)),
             zero,
         );
 
@@ -217,11 +219,11 @@ impl ChildBounds {
         // from p that the bounding sphere subtends.
         let wi = [d[0] * inv, d[1] * inv, d[2] * inv];
         let sin_b = radius * inv;
-        let cos_b = safe_sqrt8(one - sin_b * sin_b);
+        let cos_b = safe_sqrt16(one - sin_b * sin_b);
         let w = [lanes(self.w[0]), lanes(self.w[1]), lanes(self.w[2])];
         let cos_w = w[0] * wi[0] + w[1] * wi[1] + w[2] * wi[2];
         let cos_w = lanes(self.two_sided).select(cos_w.abs(), cos_w);
-        let sin_w = safe_sqrt8(one - cos_w * cos_w);
+        let sin_w = safe_sqrt16(one - cos_w * cos_w);
         // θ' = max(0, θw − θo − θb).
         let (sin_o, cos_o) = (lanes(self.sin_o), lanes(self.cos_o));
         let cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, cos_o);
@@ -230,11 +232,11 @@ impl ChildBounds {
         let mut importance = phi * cos_p * (inv * inv);
         if n != Vec3::ZERO {
             let cos_i = (wi[0] * n.x + wi[1] * n.y + wi[2] * n.z).abs();
-            let sin_i = safe_sqrt8(one - cos_i * cos_i);
+            let sin_i = safe_sqrt16(one - cos_i * cos_i);
             importance *= cos_sub_clamped(sin_i, cos_i, sin_b, cos_b);
         }
         // f32::clamp(0, MAX), which keeps a NaN.
-        let clamped = importance.max(zero).min(f32x8::splat(f32::MAX));
+        let clamped = importance.max(zero).min(f32x16::splat(f32::MAX));
         let importance = importance.is_nan().select(importance, clamped);
         let outside = cos_p.simd_le(cos_e).select(zero, importance);
         inside.select(inside_importance, outside)
@@ -243,24 +245,24 @@ impl ChildBounds {
 
 /// `sqrt(max(x, 0))` per lane.
 #[inline(always)]
-fn safe_sqrt8(x: f32x8) -> f32x8 {
-    x.max(f32x8::splat(0.0)).sqrt()
+fn safe_sqrt16(x: f32x16) -> f32x16 {
+    x.max(f32x16::splat(0.0)).sqrt()
 }
 
 /// cos(max(0, a − b)) from the sines and cosines of a and b, per lane.
 #[inline(always)]
-fn cos_sub_clamped(sin_a: f32x8, cos_a: f32x8, sin_b: f32x8, cos_b: f32x8) -> f32x8 {
+fn cos_sub_clamped(sin_a: f32x16, cos_a: f32x16, sin_b: f32x16, cos_b: f32x16) -> f32x16 {
     cos_a
         .simd_gt(cos_b)
-        .select(f32x8::splat(1.0), cos_a * cos_b + sin_a * sin_b)
+        .select(f32x16::splat(1.0), cos_a * cos_b + sin_a * sin_b)
 }
 
 /// sin(max(0, a − b)), per lane.
 #[inline(always)]
-fn sin_sub_clamped(sin_a: f32x8, cos_a: f32x8, sin_b: f32x8, cos_b: f32x8) -> f32x8 {
+fn sin_sub_clamped(sin_a: f32x16, cos_a: f32x16, sin_b: f32x16, cos_b: f32x16) -> f32x16 {
     cos_a
         .simd_gt(cos_b)
-        .select(f32x8::splat(0.0), sin_a * cos_b - cos_a * sin_b)
+        .select(f32x16::splat(0.0), sin_a * cos_b - cos_a * sin_b)
 }
 
 /// The angle between unit vectors, accurate near 0 and π.
@@ -396,7 +398,7 @@ const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 /// Beyond this depth the SAH gives way to median splits (pbrt-v4 allows at most 64 levels).
 const MAX_SAH_DEPTH: u32 = 64;
 /// Children per node of the tree.
-const WIDTH: usize = 8;
+const WIDTH: usize = 16;
 /// Set in [`Node::child`] for a light primitive (a leaf); clear for a node.
 const LEAF: u32 = 1 << 31;
 
