@@ -188,3 +188,53 @@ fn with_a_gaussian_filter_adaptive_renders_converge_to_the_splatted_image() {
         }
     }
 }
+
+#[test]
+fn aovs_under_adaptive_sampling_count_each_sample_where_the_image_does() {
+    // A glowing diffuse square over a black background, seen by emission only: every sample
+    // of the image is 2 · [it hits the square] and of the albedo AOV 0.5 · [it hits], so a
+    // pixel's image over 2 equals its albedo over 0.5 exactly when both count the same
+    // samples with the same weights. Under adaptive sampling the edge pixels get more
+    // samples than their neighbours; had the AOV splatted its samples into the neighbours
+    // while the image counts each in its own pixel, the two would part there.
+    let xml = format!(
+        r#"<scene version="3.0.0">
+        <integrator type="aov"><string name="aovs" value="a:albedo"/>
+            <integrator type="path" name="beauty"><integer name="max_depth" value="1"/></integrator>
+        </integrator>
+        {}
+        <shape type="rectangle"><transform name="to_world"><rotate z="1" angle="20"/><scale value="1.3"/></transform>
+            <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf>
+            <emitter type="area"><rgb name="radiance" value="2"/></emitter></shape>
+        </scene>"#,
+        sensor("0, 0, 5", "0, 0, 0", 40.0, 24, 16).replace(
+            r#"<rfilter type="box"/>"#,
+            r#"<rfilter type="gaussian"><float name="stddev" value="0.5"/></rfilter>"#,
+        )
+    );
+    assert!(xml.contains("gaussian"));
+    let path = write_scene("adaptive-aov", &xml);
+    let scene = Scene::build(load_mitsuba_xml(&path, &[]).unwrap_or_else(|e| panic!("{e}")));
+    let out = render_with(&scene, SamplerKind::Sobol, 64, 7, true);
+    // The samples did move: not the even render.
+    let even = render_with(&scene, SamplerKind::Sobol, 64, 7, false);
+    assert_ne!(out.image, even.image);
+    let albedo = common::aov_plane(&out, "a.R");
+    let (mut edges, mut inside) = (0, 0);
+    for (i, (p, a)) in out.image.pixels.iter().zip(albedo).enumerate() {
+        let (coverage, by_albedo) = (p.x / 2.0, a / 0.5);
+        assert!(
+            (coverage - by_albedo).abs() <= 1e-5,
+            "pixel {i}: the image says {coverage} of it is covered, the albedo {by_albedo}"
+        );
+        if coverage > 0.02 && coverage < 0.98 {
+            edges += 1;
+        } else if coverage >= 0.98 {
+            inside += 1;
+        }
+    }
+    assert!(
+        edges >= 20 && inside >= 20,
+        "{edges} edge pixels, {inside} inside"
+    );
+}
