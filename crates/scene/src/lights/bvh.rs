@@ -175,12 +175,12 @@ impl ChildBounds {
     }
 
     /// The weights of the first `count` children from (`p`, `n`) and their sum: the
-    /// importances, or the powers where none has any importance (0 beyond `count`). Each
-    /// child's probability is its weight over the sum.
+    /// importances, or the powers where none has any importance (lanes from `count` on are
+    /// not children, and are not to be read). Each child's probability is its weight over
+    /// the sum.
     #[inline]
     fn weights(&self, p: Vec3, n: Vec3, count: usize) -> ([f32; WIDTH], f32) {
-        let mut c = self.importance(p, n).to_array();
-        c[count..].fill(0.0);
+        let c = self.importance(p, n).to_array();
         let sum: f32 = c[..count].iter().sum();
         if sum > 0.0 && sum.is_finite() {
             (c, sum)
