@@ -34,8 +34,9 @@ pub struct AreaLight {
 
 impl AreaLight {
     /// A point on light primitive `face` seen from `ref_p` (the shape decides how: by solid
-    /// angle where it can, else by area). As Mitsuba, a sample on the back of the geometric
-    /// normal carries no light.
+    /// angle where it can, else by area). As Mitsuba (`area.cpp`'s `sample_direction`), a
+    /// sample seen from behind its shading normal (the interpolated vertex normal on a smooth
+    /// mesh, else the geometric one) carries no light.
     #[inline]
     pub fn sample_direction(
         &self,
@@ -47,7 +48,7 @@ impl AreaLight {
         let shape = &shapes[self.shape as usize];
         let ds = shape.sample_direction(ref_p, face, u)?;
         let (p, n, d) = (Vec3::from(ds.p), Vec3::from(ds.n), Vec3::from(ds.d));
-        if n.dot(d) >= 0.0 {
+        if Vec3::from(ds.sh_n).dot(d) >= 0.0 {
             return None;
         }
         let radiance = match &self.radiance {
@@ -81,13 +82,14 @@ impl AreaLight {
     }
 
     /// Density of [`AreaLight::sample_direction`] for the hit `si` from `ref_p`; 0 from behind
-    /// the geometric normal, where sampling gives nothing either.
+    /// the shading normal, where sampling gives nothing either (`area.cpp`'s `pdf_direction`
+    /// takes `ds.n`, which is `si.sh_frame.n`).
     #[inline]
     pub fn pdf_direction(&self, shapes: &[Shape], ref_p: Vec3, si: &SurfaceInteraction) -> f32 {
-        if si.n.dot(si.p - ref_p) >= 0.0 {
+        if si.frame.n.dot(si.p - ref_p) >= 0.0 {
             return 0.0;
         }
-        shapes[self.shape as usize].pdf_direction(ref_p, si.face, si.p, si.n)
+        shapes[self.shape as usize].pdf_direction(ref_p, si.face, si.p, si.n, si.frame.n)
     }
 
     /// π · L · area of the light primitive (one-sided Lambertian emission), with the

@@ -325,15 +325,25 @@ pub(crate) fn light_bounds(
             let shape = &shapes[a.shape as usize];
             Some(match &shape.kind {
                 ShapeKind::Mesh(mesh) => {
-                    let v = mesh.indices[face as usize].map(|i| mesh.positions[i as usize]);
+                    let idx = mesh.indices[face as usize];
+                    let v = idx.map(|i| mesh.positions[i as usize]);
                     let mut n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+                    // A smooth mesh emits about its interpolated vertex normals
+                    // (`Shape::sample_direction`): the cone about the facet's normal holds
+                    // them all, so that no point lit by the triangle is given importance 0.
+                    let cos_o = mesh.normals.as_ref().map_or(1.0, |ns| {
+                        idx.iter()
+                            .map(|&i| n.dot(ns[i as usize]))
+                            .fold(1.0f32, f32::min)
+                            .max(-1.0)
+                    });
                     if mesh.flip_normals {
                         n = -n;
                     }
                     LightBounds {
                         lo: v[0].min(v[1]).min(v[2]),
                         hi: v[0].max(v[1]).max(v[2]),
-                        ..at(Vec3::ZERO, n, 1.0, cos_half_pi)
+                        ..at(Vec3::ZERO, n, cos_o, cos_half_pi)
                     }
                 }
                 // Normals in every direction.

@@ -1017,6 +1017,150 @@ fn a_lone_emitting_mesh_is_chosen_from_by_the_tree_and_a_rectangle_by_area() {
 }
 
 // ---------------------------------------------------------------------------------------
+// Smooth mesh lights: Mitsuba's convention
+
+/// A low cap of three triangles around the z axis, apex up, with vertex normals of a sphere
+/// (bent outwards from each facet's own normal), glowing with radiance 1.
+fn smooth_cap() -> Geometry {
+    let apex = Vec3::new(0.0, 0.0, 0.3);
+    let base: Vec<Vec3> = (0..3)
+        .map(|k| {
+            let a = k as f32 * 2.0 * PI / 3.0;
+            Vec3::new(a.cos(), a.sin(), 0.0)
+        })
+        .collect();
+    let mut positions = vec![apex];
+    positions.extend(&base);
+    let mut normals = vec![Vec3::Z];
+    normals.extend(
+        base.iter()
+            .map(|b| (*b + Vec3::new(0.0, 0.0, 0.5)).normalize()),
+    );
+    Geometry::Mesh(Mesh {
+        positions,
+        normals: Some(normals),
+        uvs: None,
+        tangents: None,
+        indices: vec![[0, 1, 2], [0, 2, 3], [0, 3, 1]],
+        flip_normals: false,
+    })
+}
+
+/// What Mitsuba's next-event estimate of a mesh light of radiance 1 converges to from `p`
+/// (`src/render/shape.cpp`, `src/emitters/area.cpp`): ∫ |d·n_s| / r² dA over the points whose
+/// interpolated vertex normal n_s faces `p` (or, with `smooth` false, the facet's normal: the
+/// solid angle the mesh's front faces subtend), by the midpoint rule.
+fn cap_integral(g: &Geometry, p: Vec3, smooth: bool) -> f64 {
+    let Geometry::Mesh(m) = g else { unreachable!() };
+    let n = 600;
+    let mut sum = 0.0f64;
+    for idx in &m.indices {
+        let v = idx.map(|i| m.positions[i as usize]);
+        let vn = idx.map(|i| m.normals.as_ref().unwrap()[i as usize]);
+        let ng = (v[1] - v[0]).cross(v[2] - v[0]);
+        let area = 0.5 * ng.length() as f64;
+        let mut acc = 0.0f64;
+        for i in 0..n {
+            for j in 0..n {
+                let u = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+                let b = warp::square_to_uniform_triangle(u);
+                let y = v[0] * (1.0 - b.x - b.y) + v[1] * b.x + v[2] * b.y;
+                let ns = if smooth {
+                    (vn[0] * (1.0 - b.x - b.y) + vn[1] * b.x + vn[2] * b.y).normalize()
+                } else {
+                    ng.normalize()
+                };
+                let delta = y - p;
+                let cos = -ns.dot(delta.normalize());
+                if cos > 0.0 {
+                    acc += (cos / delta.length_squared()) as f64;
+                }
+            }
+        }
+        sum += acc * area / (n * n) as f64;
+    }
+    sum
+}
+
+#[test]
+fn a_smooth_mesh_light_glows_about_its_vertex_normals_as_in_mitsuba() {
+    let cap = smooth_cap();
+    let s = scene(
+        vec![emitting(cap.clone(), Vec3::ONE)],
+        vec![],
+        LightSamplerKind::Bvh,
+    );
+    let tris = triangles(&cap);
+    let mut rng = rand_pcg::Pcg32::new(7, 11);
+    use rand::Rng;
+    // Above (the triangles by solid angle), far above (by area); below the base plane
+    // beside the cap, where every facet is seen from behind but the normals near a base
+    // edge face the point (near and far); and far away level with the base, where one facet
+    // faces the point and the vertex normals of another bend towards it, which the light
+    // tree's bounds of the facet alone would give no importance (its cones must hold the
+    // vertex normals).
+    for p in [
+        Vec3::new(0.3, 0.2, 1.5),
+        Vec3::new(60.0, 30.0, 90.0),
+        Vec3::new(2.0, 0.0, -1.0),
+        Vec3::new(10.0, 17.32, -15.0),
+        Vec3::new(12.5, 21.65, -1.0),
+    ] {
+        let ctx = LightContext { p, n: Vec3::ZERO };
+        let (mut sum, mut sum2, n) = (0.0f64, 0.0f64, 400_000);
+        let mut checked = 0;
+        for _ in 0..n {
+            let u = Vec2::new(rng.random(), rng.random());
+            let Some(es) = s.sample_emitter_direction(&ctx, rng.random(), u) else {
+                continue;
+            };
+            let x = (es.radiance.x / es.pdf) as f64;
+            sum += x;
+            sum2 += x * x;
+            // The density BSDF sampling's MIS asks for at that point is the same one (away
+            // from grazing the shading normal, where its cosine has few significant bits).
+            if checked < 2000 {
+                if let Some(si) = s.intersect(&Ray::new(p, es.d, f32::INFINITY)) {
+                    // Inside the face hit, clear of its edges: the face that was sampled.
+                    let v = tris[si.face as usize];
+                    let nv = (v[1] - v[0]).cross(v[2] - v[0]);
+                    let b1 = (si.p - v[0]).cross(v[2] - v[0]).dot(nv) / nv.length_squared();
+                    let b2 = (v[1] - v[0]).cross(si.p - v[0]).dot(nv) / nv.length_squared();
+                    let inside = b1.min(b2).min(1.0 - b1 - b2) > 1e-3;
+                    if inside
+                        && (si.p - es.p).length() < 1e-4 * es.dist
+                        && si.frame.n.dot(es.d) < -0.05
+                    {
+                        let (e, _) = s.surface_emitter(&si).unwrap();
+                        let pdf = s.pdf_emitter_direction(&ctx, e, Some(&si), es.d);
+                        assert!(
+                            (pdf / es.pdf - 1.0).abs() < 2e-3,
+                            "from {p}: sampled with pdf {}, asked {pdf}",
+                            es.pdf
+                        );
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 100, "from {p}: {checked} samples checked");
+        let mean = sum / n as f64;
+        let err = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+        let (smooth, flat) = (cap_integral(&cap, p, true), cap_integral(&cap, p, false));
+        eprintln!("from {p}: {mean:.6e} ± {err:.1e}, Mitsuba's {smooth:.6e}, facets' {flat:.6e}");
+        assert!(
+            (mean - smooth).abs() < 4.0 * err + 1e-4 * smooth,
+            "from {p}: next-event estimation gives {mean} ± {err}, Mitsuba's integral {smooth}"
+        );
+        // The two differ by far more than the test's resolution, so it can fail.
+        assert!(
+            (smooth - flat).abs() > 20.0 * err,
+            "{smooth} against {flat}"
+        );
+    }
+}
+
+// ---------------------------------------------------------------------------------------
 // Delta lights: values against closed forms
 
 #[test]
