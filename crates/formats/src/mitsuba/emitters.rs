@@ -17,7 +17,7 @@ pub(crate) fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<(EmitterDesc,
     let weight = sampling_weight(&mut p)?;
     let e = match p.node.plugin.as_str() {
         "constant" => EmitterDesc::Constant {
-            radiance: p.color("radiance", 1.0, false)?.as_vec3(),
+            radiance: p.emitted_color("radiance", 1.0)?.as_vec3(),
         },
         "envmap" => envmap(b, &mut p)?,
         "point" => {
@@ -29,13 +29,13 @@ pub(crate) fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<(EmitterDesc,
             };
             EmitterDesc::Point {
                 position: position.as_vec3(),
-                intensity: p.color("intensity", 1.0, false)?.as_vec3(),
+                intensity: p.emitted_color("intensity", 1.0)?.as_vec3(),
             }
         }
         "spot" if p.has("inner_cone_angle") || p.has("outer_cone_angle") => {
             // radia's extension: glTF's smooth profile (KHR_lights_punctual), the cone
             // angles in degrees as Mitsuba's are; the glTF reader's spot in XML.
-            let intensity = p.color("intensity", 1.0, false)?.as_vec3();
+            let intensity = p.emitted_color("intensity", 1.0)?.as_vec3();
             let pos = p.pos_of("outer_cone_angle");
             let outer = p.float("outer_cone_angle", 45.0)?;
             let inner = p.float("inner_cone_angle", 0.0)?;
@@ -54,7 +54,7 @@ pub(crate) fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<(EmitterDesc,
             }
         }
         "spot" => {
-            let intensity = p.color("intensity", 1.0, false)?.as_vec3();
+            let intensity = p.emitted_color("intensity", 1.0)?.as_vec3();
             let cutoff_angle = p.float("cutoff_angle", 20.0)?;
             let beam_width = p.float("beam_width", cutoff_angle * 0.75)?;
             // radia's extension: the classic cos^e profile (Mitsuba rejects the parameter).
@@ -96,7 +96,7 @@ pub(crate) fn build_emitter(b: &Builder<'_>, idx: usize) -> Result<(EmitterDesc,
             }
             EmitterDesc::Directional {
                 direction: direction.normalize().as_vec3(),
-                irradiance: p.color("irradiance", 1.0, false)?.as_vec3(),
+                irradiance: p.emitted_color("irradiance", 1.0)?.as_vec3(),
             }
         }
         "area" => return Err(p.err("an area emitter must be nested in the <shape> that emits")),
@@ -131,7 +131,7 @@ pub(crate) fn area_emitter(b: &mut Builder<'_>, idx: usize) -> Result<(Texture, 
     match p.node.plugin.as_str() {
         "area" => {
             let weight = sampling_weight(&mut p)?;
-            let radiance = super::textures::texture_param(b, &mut p, "radiance", 1.0, false)?;
+            let radiance = super::textures::emitted_texture_param(b, &mut p, "radiance", 1.0)?;
             p.finish()?;
             Ok((radiance, weight))
         }

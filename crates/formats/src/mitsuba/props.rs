@@ -6,6 +6,13 @@ use super::xml::{Doc, Kind, Node, Value};
 use crate::error::{LoadError, TextPos};
 use glam::{DMat4, DVec3};
 
+/// Mitsuba's `xyz_to_srgb` applied to XYZ = (1, 1, 1): the rows of its matrix summed.
+const EQUAL_ENERGY_SRGB: DVec3 = DVec3::new(
+    3.240479 - 1.537150 - 0.498535,
+    -0.969256 + 1.875991 + 0.041556,
+    0.055648 - 0.204043 + 1.057311,
+);
+
 pub(crate) struct Props<'a> {
     pub doc: &'a Doc,
     pub node: &'a Node,
@@ -134,13 +141,37 @@ impl<'a> Props<'a> {
         }
     }
 
-    /// A constant texture given as `<float>`/`<integer>` (grey) or `<rgb>`, as Mitsuba's
-    /// `get_texture`. With `bounded` (reflectances), RGB components must lie in [0, 1] as in
-    /// Mitsuba's `srgb` spectrum; a float is not range-checked (Mitsuba's `uniform`).
+    /// A constant texture given as `<float>`/`<integer>` (grey), `<rgb>` or a uniform
+    /// `<spectrum>`, as Mitsuba's `get_texture`. With `bounded` (reflectances), RGB
+    /// components must lie in [0, 1] as in Mitsuba's `srgb` spectrum; a float or uniform
+    /// spectrum is not range-checked (Mitsuba's `uniform`).
     pub fn color(&mut self, name: &str, default: f64, bounded: bool) -> Result<DVec3, LoadError> {
+        self.color_of(name, default, bounded, false)
+    }
+
+    /// [`Props::color`] of an emitter's radiance, intensity or irradiance (Mitsuba's
+    /// `get_emissive_texture`). The same, except that a uniform spectrum of value v is the
+    /// colour v · M (1, 1, 1), M Mitsuba's XYZ-to-sRGB matrix (`xyz_to_srgb`,
+    /// `include/mitsuba/core/spectrum.h`): equal energy at every wavelength is not white
+    /// in sRGB, whose white is D65, and Mitsuba's RGB variants give it that colour so that
+    /// they match its spectral ones (`Properties::get_texture_impl`,
+    /// `src/core/properties.cpp`).
+    pub fn emitted_color(&mut self, name: &str, default: f64) -> Result<DVec3, LoadError> {
+        self.color_of(name, default, false, true)
+    }
+
+    fn color_of(
+        &mut self,
+        name: &str,
+        default: f64,
+        bounded: bool,
+        emitted: bool,
+    ) -> Result<DVec3, LoadError> {
         let (i, c) = match self.get(name) {
             None => return Ok(DVec3::splat(default)),
             Some((i, Value::Float(x))) => (i, DVec3::splat(*x)),
+            Some((i, Value::UniformSpectrum(x))) if emitted => (i, *x * EQUAL_ENERGY_SRGB),
+            Some((i, Value::UniformSpectrum(x))) => (i, DVec3::splat(*x)),
             Some((i, Value::Integer(k))) => (i, DVec3::splat(*k as f64)),
             Some((i, Value::Rgb(c))) => {
                 if bounded && (c.min_element() < 0.0 || c.max_element() > 1.0) {

@@ -936,6 +936,75 @@ fn loader_references_and_ids() {
 // ---------------------------------------------------------------------------------------
 // Materials and emitters
 
+/// `<spectrum value="v"/>` as Mitsuba's RGB variants read it (`src/core/properties.cpp`,
+/// `get_texture_impl`): grey v for a reflectance or an index, v · xyz_to_srgb(1, 1, 1) for
+/// an emitter's radiance, intensity or irradiance; wavelength:value lists, files and
+/// spectrum plugins are refused with the line.
+#[test]
+fn loader_uniform_spectra() {
+    let s = load_ok(
+        "uniform-spectrum",
+        r#"<shape type="sphere"><bsdf type="diffuse"><spectrum name="reflectance" value="0.25"/></bsdf></shape>
+        <shape type="sphere"><emitter type="area"><spectrum name="radiance" value="2"/></emitter></shape>
+        <emitter type="constant"><spectrum name="radiance" value="0.5"/></emitter>"#,
+    );
+    assert_vec_close(
+        diffuse_color(&s.shapes[0].bsdf),
+        Vec3::splat(0.25),
+        0.0,
+        "a reflectance is the value itself",
+    );
+    // The rows of Mitsuba's XYZ-to-sRGB matrix summed: equal energy is purplish in sRGB.
+    let white = Vec3::new(1.204794, 0.948291, 0.908916);
+    match &s.shapes[1].emission {
+        Some(radia_bsdf::Texture::Constant(c)) => {
+            assert_vec_close(*c, 2.0 * white, 1e-6, "area radiance")
+        }
+        e => panic!("{e:?}"),
+    }
+    match &s.emitters[0] {
+        EmitterDesc::Constant { radiance } => {
+            assert_vec_close(*radiance, 0.5 * white, 1e-6, "constant radiance")
+        }
+        e => panic!("{e:?}"),
+    }
+    expect_err(
+        load(
+            "spectrum-pairs",
+            r#"<emitter type="constant"><spectrum name="radiance" value="400:0.1, 700:0.2"/></emitter>"#,
+        ),
+        "wavelength:value spectra are not supported",
+    );
+    expect_err(
+        load(
+            "spectrum-file",
+            r#"<emitter type="constant"><spectrum name="radiance" filename="d65.spd"/></emitter>"#,
+        ),
+        "spectra from files are not supported",
+    );
+    expect_err(
+        load(
+            "spectrum-both",
+            r#"<emitter type="constant"><spectrum name="radiance" value="1" filename="d65.spd"/></emitter>"#,
+        ),
+        "requires either",
+    );
+    expect_err(
+        load(
+            "spectrum-plugin",
+            r#"<emitter type="constant"><spectrum type="blackbody" name="radiance"/></emitter>"#,
+        ),
+        "spectrum plugin type \"blackbody\"",
+    );
+    expect_err(
+        load(
+            "spectrum-nan",
+            r#"<emitter type="constant"><spectrum name="radiance" value="bright"/></emitter>"#,
+        ),
+        "could not parse uniform spectrum value",
+    );
+}
+
 #[test]
 fn loader_twosided_and_default_bsdfs() {
     let s = load_ok(

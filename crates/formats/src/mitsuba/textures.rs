@@ -30,6 +30,20 @@ pub(crate) fn texture_param(
     texture_param_nested(b, p, name, default, bounded, 0)
 }
 
+/// [`texture_param`] of an emitter's radiance (Mitsuba's `get_emissive_texture`): a constant
+/// is read by [`Props::emitted_color`].
+pub(crate) fn emitted_texture_param(
+    b: &mut Builder<'_>,
+    p: &mut Props<'_>,
+    name: &str,
+    default: f64,
+) -> Result<Texture, LoadError> {
+    if p.object_named(name).is_some() {
+        return texture_param(b, p, name, default, false);
+    }
+    Ok(Texture::Constant(p.emitted_color(name, default)?.as_vec3()))
+}
+
 fn texture_param_nested(
     b: &mut Builder<'_>,
     p: &mut Props<'_>,

@@ -52,6 +52,9 @@ pub(crate) enum Value {
     Boolean(bool),
     String(String),
     Rgb(DVec3),
+    /// A uniform `<spectrum value="v"/>` (one value at every wavelength). What it means in
+    /// Mitsuba's RGB variants depends on who reads it ([`super::props::Props::color`]).
+    UniformSpectrum(f64),
     /// `<point>` or `<vector>` (one type in Mitsuba 3).
     Vector(DVec3),
     Transform(DMat4),
@@ -70,6 +73,7 @@ impl Value {
             Value::Boolean(_) => "boolean",
             Value::String(_) => "string",
             Value::Rgb(_) => "rgb",
+            Value::UniformSpectrum(_) => "spectrum",
             Value::Vector(_) => "point/vector",
             Value::Transform(_) => "transform",
             Value::Ref(_) | Value::Object(_) => "object",
@@ -956,10 +960,48 @@ impl<'a, 'x> Parser<'a, 'x> {
             "medium" | "phase" | "volume" => {
                 Err(self.err(epos, format!("<{tag}> objects are not supported by radia")))
             }
-            "spectrum" => Err(self.err(
-                epos,
-                "<spectrum> is not supported by radia: use <rgb> or <float>",
-            )),
+            // Mitsuba's parser (`src/core/parser.cpp`, `Properties::Spectrum` in
+            // `src/core/properties.cpp`): `value` is one number (a uniform spectrum) or
+            // wavelength:value pairs, or `filename` names a spectrum file; a `type` makes it
+            // a spectrum plugin. radia renders in RGB and takes the uniform one.
+            "spectrum" => {
+                if let Some(t) = attr(&attrs, "type") {
+                    return Err(self.err(
+                        epos,
+                        format!(
+                            "spectrum plugin type \"{t}\" is not supported by radia (use <rgb>)"
+                        ),
+                    ));
+                }
+                self.check_attributes(tag, epos, &attrs, &["!name", "value", "filename"])?;
+                let v = match (attr(&attrs, "value"), attr(&attrs, "filename")) {
+                    (Some(v), None) => v,
+                    (None, Some(f)) => {
+                        return Err(self.err(
+                            epos,
+                            format!("<spectrum name=\"{name}\" filename=\"{f}\">: spectra from files are not supported by radia (use <rgb>)"),
+                        ))
+                    }
+                    _ => {
+                        return Err(self.err(
+                            epos,
+                            "<spectrum> element requires either \"value\" or \"filename\" attribute (but not both)",
+                        ))
+                    }
+                };
+                let toks = tokenize(v);
+                if toks.len() == 1 && !v.contains(':') {
+                    let x = parse_float(toks[0]).ok_or_else(|| {
+                        self.err(epos, format!("could not parse uniform spectrum value \"{v}\" of <spectrum name=\"{name}\">"))
+                    })?;
+                    self.add_prop(parent_idx, &name, Value::UniformSpectrum(x), epos)
+                } else {
+                    Err(self.err(
+                        epos,
+                        format!("<spectrum name=\"{name}\" value=\"{v}\">: wavelength:value spectra are not supported by radia, which renders in RGB (use <rgb>, or one value for a uniform spectrum)"),
+                    ))
+                }
+            }
             "include" => {
                 self.check_attributes(tag, epos, &attrs, &["!filename", "name"])?;
                 let filename = attr(&attrs, "filename").unwrap_or("");
