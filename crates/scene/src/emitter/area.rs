@@ -48,7 +48,7 @@ impl AreaLight {
         let shape = &shapes[self.shape as usize];
         let ds = shape.sample_direction(ref_p, face, u)?;
         let (p, n, d) = (Vec3::from(ds.p), Vec3::from(ds.n), Vec3::from(ds.d));
-        if Vec3::from(ds.sh_n).dot(d) >= 0.0 {
+        if ds.sh_cos >= 0.0 {
             return None;
         }
         let radiance = match &self.radiance {
