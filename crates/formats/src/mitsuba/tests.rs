@@ -968,41 +968,36 @@ fn loader_uniform_spectra() {
         }
         e => panic!("{e:?}"),
     }
-    expect_err(
-        load(
+    for (name, spectrum, needle) in [
+        (
             "spectrum-pairs",
-            r#"<emitter type="constant"><spectrum name="radiance" value="400:0.1, 700:0.2"/></emitter>"#,
+            r#"<spectrum name="radiance" value="400:0.1, 700:0.2"/>"#,
+            "wavelength:value spectra are not supported",
         ),
-        "wavelength:value spectra are not supported",
-    );
-    expect_err(
-        load(
+        (
             "spectrum-file",
-            r#"<emitter type="constant"><spectrum name="radiance" filename="d65.spd"/></emitter>"#,
+            r#"<spectrum name="radiance" filename="d65.spd"/>"#,
+            "spectra from files are not supported",
         ),
-        "spectra from files are not supported",
-    );
-    expect_err(
-        load(
+        (
             "spectrum-both",
-            r#"<emitter type="constant"><spectrum name="radiance" value="1" filename="d65.spd"/></emitter>"#,
+            r#"<spectrum name="radiance" value="1" filename="d65.spd"/>"#,
+            "requires either",
         ),
-        "requires either",
-    );
-    expect_err(
-        load(
+        (
             "spectrum-plugin",
-            r#"<emitter type="constant"><spectrum type="blackbody" name="radiance"/></emitter>"#,
+            r#"<spectrum type="blackbody" name="radiance"/>"#,
+            "spectrum plugin type \"blackbody\"",
         ),
-        "spectrum plugin type \"blackbody\"",
-    );
-    expect_err(
-        load(
+        (
             "spectrum-nan",
-            r#"<emitter type="constant"><spectrum name="radiance" value="bright"/></emitter>"#,
+            r#"<spectrum name="radiance" value="bright"/>"#,
+            "could not parse uniform spectrum value",
         ),
-        "could not parse uniform spectrum value",
-    );
+    ] {
+        let body = format!(r#"<emitter type="constant">{spectrum}</emitter>"#);
+        expect_err(load(name, &body), needle);
+    }
 }
 
 #[test]
