@@ -548,21 +548,7 @@ impl Shape {
             ShapeKind::Disk { .. } | ShapeKind::Instance(_) => {}
         }
         let ps = self.sample_position(face, u);
-        let delta = ps.p - ref_p;
-        let dist2 = delta.length_squared();
-        let dist = dist2.sqrt();
-        let d = delta / dist;
-        let cos = ps.n.dot(d);
-        let pdf = ps.pdf * dist2 / cos.abs();
-        (pdf.is_finite() && pdf > 0.0).then_some(DirectionSample {
-            p: ps.p.into(),
-            p_error: ps.p_error.into(),
-            n: ps.n.into(),
-            d: d.into(),
-            dist,
-            pdf,
-            sh_cos: cos,
-        })
+        seen_from(ref_p, &ps, ps.n)
     }
 
     /// Solid-angle density of [`Shape::sample_direction`] from `ref_p` returning the point `p`
@@ -867,17 +853,30 @@ fn smooth_area_direction(
     let v = t.v;
     let b = warp::square_to_uniform_triangle(u);
     let (p, p_error) = triangle_point(v[0], v[1] - v[0], v[2] - v[0], b.x, b.y);
-    let sh_n = emitted_normal(mesh, face, b.x, b.y, t.n);
-    let delta = p - ref_p;
+    let ps = PositionSample {
+        p,
+        p_error,
+        n: t.n,
+        pdf: 1.0 / t.area,
+    };
+    seen_from(ref_p, &ps, emitted_normal(mesh, face, b.x, b.y, t.n))
+}
+
+/// The point `ps`, drawn with a density per unit area, as a direction from `ref_p`: its
+/// density converted to solid angle with the cosine about `sh_n` (the normal the emitter
+/// glows about, `ps.n` but on smooth meshes).
+#[inline(always)]
+fn seen_from(ref_p: Vec3, ps: &PositionSample, sh_n: Vec3) -> Option<DirectionSample> {
+    let delta = ps.p - ref_p;
     let dist2 = delta.length_squared();
     let dist = dist2.sqrt();
     let d = delta / dist;
     let cos = sh_n.dot(d);
-    let pdf = dist2 / (cos.abs() * t.area);
+    let pdf = ps.pdf * dist2 / cos.abs();
     (pdf.is_finite() && pdf > 0.0).then_some(DirectionSample {
-        p: p.into(),
-        p_error: p_error.into(),
-        n: t.n.into(),
+        p: ps.p.into(),
+        p_error: ps.p_error.into(),
+        n: ps.n.into(),
         d: d.into(),
         dist,
         pdf,
@@ -886,8 +885,8 @@ fn smooth_area_direction(
 }
 
 /// The density `pdf` that solid-angle sampling gives a point of a triangle of `mesh`
-/// (geometric normal `n`) seen along `d` (of any length), put in Mitsuba's convention where the mesh has
-/// vertex normals. Mitsuba's area light converts its area density to solid angle with the
+/// (geometric normal `n`) seen along `d` (of any length), put in Mitsuba's convention where
+/// the mesh has vertex normals. Mitsuba's area light converts its area density to solid angle with the
 /// cosine about the shading normal `sh_n` (`Shape::sample_direction` and `pdf_direction`,
 /// `src/render/shape.cpp`), so its next-event estimate converges to the light's integral
 /// weighted by |d·sh_n| / |d·n|; dividing radia's density by that ratio makes the same
