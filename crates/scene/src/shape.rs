@@ -3,8 +3,10 @@
 //! be done: spheres seen from outside, triangles of reasonable solid angle; else by area).
 
 mod lanes;
+mod light_lanes;
 
 pub(crate) use lanes::{DiskHits, MeshHits, SphereHits};
+pub(crate) use light_lanes::LightTriangles;
 
 use crate::accel::{Hit, Primitive};
 use crate::description::{Geometry, Mesh};
@@ -78,7 +80,7 @@ pub struct Shape {
 /// One triangle of a mesh as light sampling sees it: its vertices and the quantities derived
 /// from them, by the same operations as before they were cached (so nothing changes by a bit).
 #[derive(Clone, Copy, Debug)]
-struct LightTriangle {
+pub(crate) struct LightTriangle {
     v: [Vec3; 3],
     /// (v1 − v0) × (v2 − v0): twice the area times the unit normal, unflipped.
     twice_area_n: Vec3,
@@ -243,6 +245,19 @@ impl Shape {
         match self.light_triangles.get(face as usize) {
             Some(t) => *t,
             None => LightTriangle::new(mesh, face),
+        }
+    }
+
+    /// Triangle `face` of a flat (no vertex normals) emitting mesh, for light sampling in
+    /// lanes ([`LightTriangles`]); `None` for every other shape, which the scalar
+    /// [`Shape::sample_direction`] samples.
+    #[inline(always)]
+    pub(crate) fn flat_light_triangle(&self, face: u32) -> Option<&LightTriangle> {
+        match &self.kind {
+            ShapeKind::Mesh(mesh) if mesh.normals.is_none() => {
+                self.light_triangles.get(face as usize)
+            }
+            _ => None,
         }
     }
 

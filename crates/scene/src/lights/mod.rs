@@ -23,10 +23,27 @@ mod tests;
 pub use bvh::{BvhLight, LightBounds, LightBvh};
 
 use crate::emitter::{Emitter, EmitterSample};
-use crate::shape::{Shape, ShapeKind, SurfaceInteraction};
+use crate::shape::{LightTriangles, Shape, ShapeKind, SurfaceInteraction};
 use crate::Scene;
 use glam::{Vec2, Vec3};
+use radia_bsdf::Texture;
+use radia_math::Spectrum;
 use radia_sampling::DiscreteDistribution;
+
+/// Queries of [`Scene::sample_emitter_directions`].
+pub const LIGHT_LANES: usize = 16;
+
+/// The indices of the set bits of `bits`, lowest first.
+#[inline(always)]
+fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (bits != 0).then(|| {
+            let k = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            k
+        })
+    })
+}
 
 /// How next-event estimation chooses a light.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -322,15 +339,89 @@ impl Scene {
         u: Vec2,
     ) -> Option<EmitterSample> {
         let (index, pmf) = self.lights.sample(ctx, u_sel)?;
-        let prim = self.lights.prim(index);
-        let mut es = self.emitters[prim.emitter as usize].sample_direction(
-            &self.shapes,
-            ctx.p,
-            prim.face,
-            u,
-        )?;
+        self.sample_light_prim(self.lights.prim(index), pmf, ctx.p, u)
+    }
+
+    /// The light sample of light primitive `prim`, chosen with probability `pmf`, from `p`.
+    #[inline(always)]
+    fn sample_light_prim(
+        &self,
+        prim: LightPrim,
+        pmf: f32,
+        p: Vec3,
+        u: Vec2,
+    ) -> Option<EmitterSample> {
+        let mut es =
+            self.emitters[prim.emitter as usize].sample_direction(&self.shapes, p, prim.face, u)?;
         es.pdf *= pmf;
         Some(es)
+    }
+
+    /// [`Scene::sample_emitter_direction`] for the lanes `active` of sixteen queries at
+    /// once: `out[k]` becomes, bit for bit, what it returns for `ctx[k]`, `u_sel[k]` and
+    /// `u[k]` (other lanes are left as they are). The light is chosen lane by lane; lights
+    /// on flat triangles that are small seen from their lane (constant radiance) are then
+    /// sampled in lanes ([`crate::shape::LightTriangles`]), every other light one lane at a
+    /// time.
+    pub fn sample_emitter_directions(
+        &self,
+        active: u32,
+        ctx: &[LightContext; LIGHT_LANES],
+        u_sel: &[f32; LIGHT_LANES],
+        u: &[Vec2; LIGHT_LANES],
+        out: &mut [Option<EmitterSample>; LIGHT_LANES],
+    ) {
+        let mut triangles = LightTriangles::new();
+        let mut chosen = [(
+            LightPrim {
+                emitter: 0,
+                face: 0,
+            },
+            0.0,
+        ); LIGHT_LANES];
+        let mut radiance = [Spectrum::ZERO; LIGHT_LANES];
+        for k in lanes_of(active) {
+            let Some((index, pmf)) = self.lights.sample(&ctx[k], u_sel[k]) else {
+                out[k] = None;
+                continue;
+            };
+            let prim = self.lights.prim(index);
+            if let Emitter::Area(light) = &self.emitters[prim.emitter as usize] {
+                if let Texture::Constant(c) = light.radiance {
+                    let shape = &self.shapes[light.shape as usize];
+                    if let Some(t) = shape.flat_light_triangle(prim.face) {
+                        triangles.push(k, t, ctx[k].p, u[k]);
+                        chosen[k] = (prim, pmf);
+                        radiance[k] = c;
+                        continue;
+                    }
+                }
+            }
+            out[k] = self.sample_light_prim(prim, pmf, ctx[k].p, u[k]);
+        }
+        if triangles.lanes() == 0 {
+            return;
+        }
+        let s = triangles.sample();
+        for k in lanes_of(triangles.lanes()) {
+            let (prim, pmf) = chosen[k];
+            out[k] = if s.by_area & (1 << k) == 0 {
+                self.sample_light_prim(prim, pmf, ctx[k].p, u[k])
+            } else if s.valid & (1 << k) == 0 {
+                None
+            } else {
+                Some(EmitterSample {
+                    d: s.d(k),
+                    dist: s.dist[k],
+                    p: s.p(k),
+                    n: s.n(k),
+                    p_error: s.p_error(k),
+                    pdf: s.pdf[k] * pmf,
+                    radiance: radiance[k],
+                    is_delta: false,
+                })
+            };
+        }
     }
 
     /// Density with which [`Scene::sample_emitter_direction`] from `ctx` produces the

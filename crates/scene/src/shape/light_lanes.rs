@@ -1,0 +1,185 @@
+//! Light samples on flat mesh triangles, sixteen at once: the area-sampling branch of
+//! [`Shape::sample_direction`](super::Shape::sample_direction), which next-event estimation
+//! takes on every emitting triangle that is small seen from the shading point (the common
+//! case: a ceiling light seen from the room).
+//!
+//! One light sample there is a chain of two square roots and three divisions (the choice of
+//! strategy, the warp to the triangle, the conversion to solid angle), which a core runs one
+//! lane after another. Here the same formulas run over sixteen lanes
+//! ([`radia_math::lanes`], whose operations are the scalar ones in the same order), so every
+//! lane holds bit for bit what the scalar code gives. Lanes whose triangle is to be sampled
+//! by solid angle are left to the scalar code ([`TriangleSamples::by_area`] says which were
+//! done here).
+
+use super::{LightTriangle, MAX_SPHERICAL_SAMPLE_AREA, MIN_SPHERICAL_SAMPLE_AREA};
+use glam::{Vec2, Vec3};
+use radia_math::float::gamma;
+use radia_math::lanes::{f32x16, Vec3s, WIDTH};
+
+type Rows = [[f32; WIDTH]; 3];
+
+const _: () = assert!(MIN_SPHERICAL_SAMPLE_AREA <= MAX_SPHERICAL_SAMPLE_AREA);
+
+/// Light samples to draw on flat triangles, gathered lane by lane ([`LightTriangles::push`]).
+pub(crate) struct LightTriangles {
+    lanes: u32,
+    /// Vertex k's coordinates: `v[k][axis][lane]`.
+    v: [Rows; 3],
+    twice_area_n: Rows,
+    n: Rows,
+    centroid: Rows,
+    area: [f32; WIDTH],
+    r2: [f32; WIDTH],
+    /// The shading point the sample is seen from.
+    ref_p: Rows,
+    /// The sample values.
+    u: [[f32; WIDTH]; 2],
+}
+
+/// What [`LightTriangles::sample`] found: per lane, the fields of the `DirectionSample` the
+/// scalar code returns.
+pub(crate) struct TriangleSamples {
+    /// Lanes sampled by area here (the others are to be sampled by solid angle).
+    pub by_area: u32,
+    /// Of those, the lanes whose sample is valid (finite, positive density, seen from the
+    /// front of the triangle: otherwise the scalar code returns no sample).
+    pub valid: u32,
+    pub p: Rows,
+    pub p_error: Rows,
+    pub n: Rows,
+    pub d: Rows,
+    pub dist: [f32; WIDTH],
+    /// Solid-angle density (the choice of the light not included).
+    pub pdf: [f32; WIDTH],
+}
+
+impl TriangleSamples {
+    #[inline(always)]
+    pub fn p(&self, k: usize) -> Vec3 {
+        row(&self.p, k)
+    }
+    #[inline(always)]
+    pub fn p_error(&self, k: usize) -> Vec3 {
+        row(&self.p_error, k)
+    }
+    #[inline(always)]
+    pub fn n(&self, k: usize) -> Vec3 {
+        row(&self.n, k)
+    }
+    #[inline(always)]
+    pub fn d(&self, k: usize) -> Vec3 {
+        row(&self.d, k)
+    }
+}
+
+#[inline(always)]
+fn row(rows: &Rows, k: usize) -> Vec3 {
+    Vec3::new(rows[0][k], rows[1][k], rows[2][k])
+}
+
+#[inline(always)]
+fn set(rows: &mut Rows, k: usize, v: Vec3) {
+    (rows[0][k], rows[1][k], rows[2][k]) = (v.x, v.y, v.z);
+}
+
+impl LightTriangles {
+    pub(crate) fn new() -> Self {
+        Self {
+            lanes: 0,
+            v: [[[0.0; WIDTH]; 3]; 3],
+            twice_area_n: [[0.0; WIDTH]; 3],
+            n: [[0.0; WIDTH]; 3],
+            centroid: [[0.0; WIDTH]; 3],
+            area: [1.0; WIDTH],
+            r2: [0.0; WIDTH],
+            ref_p: [[0.0; WIDTH]; 3],
+            u: [[0.0; WIDTH]; 2],
+        }
+    }
+
+    /// Lanes pushed.
+    #[inline(always)]
+    pub(crate) fn lanes(&self) -> u32 {
+        self.lanes
+    }
+
+    /// Lane `k` samples triangle `t` from `ref_p` with the values `u`.
+    #[inline(always)]
+    pub(crate) fn push(&mut self, k: usize, t: &LightTriangle, ref_p: Vec3, u: Vec2) {
+        self.lanes |= 1 << k;
+        for (rows, v) in self.v.iter_mut().zip(t.v) {
+            set(rows, k, v);
+        }
+        set(&mut self.twice_area_n, k, t.twice_area_n);
+        set(&mut self.n, k, t.n);
+        set(&mut self.centroid, k, t.centroid);
+        self.area[k] = t.area;
+        self.r2[k] = t.r2;
+        set(&mut self.ref_p, k, ref_p);
+        (self.u[0][k], self.u[1][k]) = (u.x, u.y);
+    }
+
+    /// The samples of the pushed lanes: `spherical_sampling`'s choice, then, where it is
+    /// area sampling, `sample_position` and `seen_from` of `shape.rs` and the front-side
+    /// test of the area light, each operation as there.
+    #[inline]
+    pub(crate) fn sample(&self) -> TriangleSamples {
+        let ref_p = Vec3s::from_rows(&self.ref_p);
+        let n = Vec3s::from_rows(&self.n);
+
+        // ---- Which lanes are area-sampled (`spherical_sampling` returns `None`) ----
+        // Only the far branch can say so without the exact solid angle; a lane nearer than
+        // twice the circumradius, or whose estimate reaches the bound, goes to the scalar
+        // code, which computes the exact angle (its result may still be area sampling).
+        let to_c = Vec3s::from_rows(&self.centroid) - ref_p;
+        let d2 = to_c.length_squared();
+        let r2 = f32x16::new(self.r2);
+        let far = d2.simd_gt(f32x16::splat(4.0) * r2);
+        let estimate = f32x16::splat(0.5) * Vec3s::from_rows(&self.twice_area_n).dot(to_c).abs()
+            / (d2 * d2.sqrt());
+        let small = estimate.simd_ge(f32x16::splat(MIN_SPHERICAL_SAMPLE_AREA));
+        let by_area = self.lanes & (far & !small).to_bitmask();
+
+        // ---- `sample_position`: uniform on the triangle ----
+        let (u0, u1) = (f32x16::new(self.u[0]), f32x16::new(self.u[1]));
+        let t = (f32x16::ONE - u0).max(f32x16::ZERO).sqrt();
+        let (b1, b2) = (f32x16::ONE - t, t * u1);
+        let v0 = Vec3s::from_rows(&self.v[0]);
+        let e1 = Vec3s::from_rows(&self.v[1]) - v0;
+        let e2 = Vec3s::from_rows(&self.v[2]) - v0;
+        // `triangle_point`.
+        let p = v0 + (e1 * b1 + e2 * b2);
+        let extent = (e1.abs() + e2.abs()).max_element();
+        let slack = extent * f32x16::splat(gamma(32));
+        let p_error = p.abs() * f32x16::splat(gamma(1))
+            + Vec3s {
+                x: slack,
+                y: slack,
+                z: slack,
+            };
+        let pdf_area = f32x16::ONE / f32x16::new(self.area);
+
+        // ---- `seen_from`: the density in solid angle ----
+        let delta = p - ref_p;
+        let dist2 = delta.length_squared();
+        let dist = dist2.sqrt();
+        let d = delta.div(dist);
+        let cos = n.dot(d);
+        let pdf = pdf_area * dist2 / cos.abs();
+        let finite = pdf.is_finite() & pdf.simd_gt(f32x16::ZERO);
+        // The area light's own test: no light seen from behind.
+        let front = !cos.simd_ge(f32x16::ZERO);
+        let valid = by_area & (finite & front).to_bitmask();
+
+        TriangleSamples {
+            by_area,
+            valid,
+            p: p.to_rows(),
+            p_error: p_error.to_rows(),
+            n: self.n,
+            d: d.to_rows(),
+            dist: dist.to_array(),
+            pdf: pdf.to_array(),
+        }
+    }
+}
