@@ -199,6 +199,67 @@ pub fn copysign(a: f32x16, b: f32x16) -> f32x16 {
     (a & !sign) | (b & sign)
 }
 
+/// [`crate::trig::sin_cos_small`] in lanes (the same fused multiply-adds).
+#[inline(always)]
+pub fn sin_cos_small(a: f32x16) -> (f32x16, f32x16) {
+    let a2 = a * a;
+    let k = f32x16::splat;
+    let s = k(1.0 / 362_880.0)
+        .mul_add(a2, k(-1.0 / 5040.0))
+        .mul_add(a2, k(1.0 / 120.0))
+        .mul_add(a2, k(-1.0 / 6.0));
+    let sin = (s * a2).mul_add(a, a);
+    let c = k(-1.0 / 3_628_800.0)
+        .mul_add(a2, k(1.0 / 40_320.0))
+        .mul_add(a2, k(-1.0 / 720.0))
+        .mul_add(a2, k(1.0 / 24.0))
+        .mul_add(a2, k(-0.5));
+    let cos = c.mul_add(a2, f32x16::ONE);
+    (sin, cos)
+}
+
+/// [`crate::trig::sin_cos_turns`] in lanes. Its `round` rounds halves away from zero where
+/// the vector instruction rounds them to even: the ties (4u an odd multiple of ½, exact)
+/// are moved back.
+#[inline(always)]
+pub fn sin_cos_turns(u: f32x16) -> (f32x16, f32x16) {
+    let x = f32x16::splat(4.0) * u;
+    let whole = x.trunc();
+    let tie = (x - whole).abs().simd_eq(f32x16::splat(0.5));
+    let q = tie.select(whole + copysign(f32x16::ONE, x), x.round_ties_even());
+    let (s, c) = sin_cos_small((x - q) * f32x16::splat(std::f32::consts::FRAC_PI_2));
+    // The quarter turn, q mod 4 in 0..3 (q is a small integer: exact).
+    let four = f32x16::splat(4.0);
+    let quarter = q - four * (q / four).floor();
+    let is = |v: f32| quarter.simd_eq(f32x16::splat(v));
+    let odd = is(1.0) | is(3.0);
+    let (a, b) = (odd.select(c, s), odd.select(s, c));
+    let sign = f32x16::splat(-0.0);
+    let sin_neg = quarter.simd_ge(f32x16::splat(2.0));
+    let cos_neg = is(1.0) | is(2.0);
+    (a ^ (sin_neg & sign), b ^ (cos_neg & sign))
+}
+
+/// [`crate::coordinate_system`] in lanes: the two tangents of a frame around `n`.
+#[inline(always)]
+pub fn coordinate_system(n: Vec3s) -> (Vec3s, Vec3s) {
+    let sign = copysign(f32x16::ONE, n.z);
+    let a = f32x16::splat(-1.0) / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vec3s {
+            x: n.x * n.x * a * sign + f32x16::ONE,
+            y: b * sign,
+            z: -n.x * sign,
+        },
+        Vec3s {
+            x: b,
+            y: sign + n.y * n.y * a,
+            z: -n.y,
+        },
+    )
+}
+
 impl Add for Vec3s {
     type Output = Self;
     #[inline(always)]
@@ -250,6 +311,65 @@ impl Mul<f32x16> for Vec3s {
 
 #[cfg(test)]
 mod tests {
+
+    /// The lane trigonometry and frames are the scalar ones bit for bit, the ties of
+    /// `sin_cos_turns`' rounding (u = k/8) and signed zeros included.
+    #[test]
+    fn turns_and_frames_in_lanes_are_the_scalar_ones() {
+        let mut us: Vec<f32> = (0..=64).map(|k| k as f32 / 64.0).collect();
+        us.extend([
+            1.0 - f32::EPSILON / 2.0,
+            1e-30,
+            -0.0,
+            -0.125,
+            -0.3,
+            1.125,
+            2.6,
+        ]);
+        let mut x = 0x1234_5678u32;
+        for _ in 0..4000 {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            us.push((x >> 8) as f32 / (1u32 << 24) as f32);
+        }
+        for chunk in us.chunks(WIDTH) {
+            let mut lanes = [0.0; WIDTH];
+            lanes[..chunk.len()].copy_from_slice(chunk);
+            let (s, c) = sin_cos_turns(f32x16::new(lanes));
+            let (s, c) = (s.to_array(), c.to_array());
+            for (k, &u) in chunk.iter().enumerate() {
+                let (ws, wc) = crate::trig::sin_cos_turns(u);
+                assert_eq!(
+                    (s[k].to_bits(), c[k].to_bits()),
+                    (ws.to_bits(), wc.to_bits()),
+                    "u = {u}"
+                );
+            }
+        }
+        let mut normals: Vec<Vec3> = vec![Vec3::Z, -Vec3::Z, Vec3::X, Vec3::new(0.0, 1.0, -0.0)];
+        for k in 0..200 {
+            let (s, c) = crate::trig::sin_cos_turns(k as f32 / 200.0);
+            let z = 1.0 - 2.0 * ((k * 37) % 200) as f32 / 199.0;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            normals.push(Vec3::new(r * c, r * s, z).normalize());
+        }
+        for chunk in normals.chunks(WIDTH) {
+            let mut rows = [[0.0; WIDTH]; 3];
+            for (k, n) in chunk.iter().enumerate() {
+                (rows[0][k], rows[1][k], rows[2][k]) = (n.x, n.y, n.z);
+            }
+            let (s, t) = coordinate_system(Vec3s::from_rows(&rows));
+            let (s, t) = (s.to_rows(), t.to_rows());
+            for (k, &n) in chunk.iter().enumerate() {
+                let (ws, wt) = crate::coordinate_system(n);
+                for axis in 0..3 {
+                    assert_eq!(s[axis][k].to_bits(), ws[axis].to_bits(), "{n}");
+                    assert_eq!(t[axis][k].to_bits(), wt[axis].to_bits(), "{n}");
+                }
+            }
+        }
+    }
     use super::*;
     use crate::trig;
 

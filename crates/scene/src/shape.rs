@@ -6,7 +6,7 @@ mod lanes;
 mod light_lanes;
 
 pub(crate) use lanes::{DiskHits, MeshHits, SphereHits};
-pub(crate) use light_lanes::LightTriangles;
+pub(crate) use light_lanes::{LightSpheres, LightTriangles};
 
 use crate::accel::{Hit, Primitive};
 use crate::description::{Geometry, Mesh};
@@ -257,6 +257,21 @@ impl Shape {
             ShapeKind::Mesh(mesh) if mesh.normals.is_none() => {
                 self.light_triangles.get(face as usize)
             }
+            _ => None,
+        }
+    }
+
+    /// Centre, radius and `flip_normals` of a sphere, for light sampling in lanes
+    /// ([`LightSpheres`]); `None` for every other shape.
+    #[inline(always)]
+    pub(crate) fn light_sphere(&self) -> Option<(Vec3, f32, bool)> {
+        match &self.kind {
+            ShapeKind::Sphere {
+                center,
+                radius,
+                flip_normals,
+                ..
+            } => Some((*center, *radius, *flip_normals)),
             _ => None,
         }
     }

@@ -23,7 +23,7 @@ mod tests;
 pub use bvh::{BvhLight, LightBounds, LightBvh};
 
 use crate::emitter::{Emitter, EmitterSample};
-use crate::shape::{LightTriangles, Shape, ShapeKind, SurfaceInteraction};
+use crate::shape::{LightSpheres, LightTriangles, Shape, ShapeKind, SurfaceInteraction};
 use crate::Scene;
 use glam::{Vec2, Vec3};
 use radia_bsdf::Texture;
@@ -359,10 +359,11 @@ impl Scene {
 
     /// [`Scene::sample_emitter_direction`] for the lanes `active` of sixteen queries at
     /// once: `out[k]` becomes, bit for bit, what it returns for `ctx[k]`, `u_sel[k]` and
-    /// `u[k]` (other lanes are left as they are). The light is chosen lane by lane; lights
-    /// on flat triangles that are small seen from their lane (constant radiance) are then
-    /// sampled in lanes ([`crate::shape::LightTriangles`]), every other light one lane at a
-    /// time.
+    /// `u[k]` (other lanes are left as they are). The light is chosen lane by lane; area
+    /// lights of constant radiance on flat triangles that are small seen from their lane and
+    /// on spheres seen from outside are then sampled in lanes
+    /// ([`crate::shape::LightTriangles`], [`crate::shape::LightSpheres`]), every other light
+    /// one lane at a time.
     pub fn sample_emitter_directions(
         &self,
         active: u32,
@@ -372,6 +373,7 @@ impl Scene {
         out: &mut [Option<EmitterSample>; LIGHT_LANES],
     ) {
         let mut triangles = LightTriangles::new();
+        let mut spheres = LightSpheres::new();
         let mut chosen = [(
             LightPrim {
                 emitter: 0,
@@ -389,8 +391,16 @@ impl Scene {
             if let Emitter::Area(light) = &self.emitters[prim.emitter as usize] {
                 if let Texture::Constant(c) = light.radiance {
                     let shape = &self.shapes[light.shape as usize];
-                    if let Some(t) = shape.flat_light_triangle(prim.face) {
+                    let pushed = if let Some(t) = shape.flat_light_triangle(prim.face) {
                         triangles.push(k, t, ctx[k].p, u[k]);
+                        true
+                    } else if let Some(sphere) = shape.light_sphere() {
+                        spheres.push(k, sphere, ctx[k].p, u[k]);
+                        true
+                    } else {
+                        false
+                    };
+                    if pushed {
                         chosen[k] = (prim, pmf);
                         radiance[k] = c;
                         continue;
@@ -399,28 +409,36 @@ impl Scene {
             }
             out[k] = self.sample_light_prim(prim, pmf, ctx[k].p, u[k]);
         }
-        if triangles.lanes() == 0 {
-            return;
-        }
-        let s = triangles.sample();
-        for k in lanes_of(triangles.lanes()) {
-            let (prim, pmf) = chosen[k];
-            out[k] = if s.by_area & (1 << k) == 0 {
-                self.sample_light_prim(prim, pmf, ctx[k].p, u[k])
-            } else if s.valid & (1 << k) == 0 {
-                None
-            } else {
-                Some(EmitterSample {
-                    d: s.d(k),
-                    dist: s.dist[k],
-                    p: s.p(k),
-                    n: s.n(k),
-                    p_error: s.p_error(k),
-                    pdf: s.pdf[k] * pmf,
-                    radiance: radiance[k],
-                    is_delta: false,
-                })
-            };
+        for (lanes, samples) in [
+            (
+                triangles.lanes(),
+                (triangles.lanes() != 0).then(|| triangles.sample()),
+            ),
+            (
+                spheres.lanes(),
+                (spheres.lanes() != 0).then(|| spheres.sample()),
+            ),
+        ] {
+            let Some(s) = samples else { continue };
+            for k in lanes_of(lanes) {
+                let (prim, pmf) = chosen[k];
+                out[k] = if s.done & (1 << k) == 0 {
+                    self.sample_light_prim(prim, pmf, ctx[k].p, u[k])
+                } else if s.valid & (1 << k) == 0 {
+                    None
+                } else {
+                    Some(EmitterSample {
+                        d: s.d(k),
+                        dist: s.dist[k],
+                        p: s.p(k),
+                        n: s.n(k),
+                        p_error: s.p_error(k),
+                        pdf: s.pdf[k] * pmf,
+                        radiance: radiance[k],
+                        is_delta: false,
+                    })
+                };
+            }
         }
     }
 

@@ -1386,8 +1386,9 @@ fn sampling_weight_multiplies_a_bvh_leafs_odds() {
 /// `Scene::sample_emitter_directions` (sixteen queries at once, flat triangles sampled in
 /// lanes) gives, bit for bit, what `sample_emitter_direction` gives each query: from points
 /// near a light triangle (solid-angle sampling, left to the scalar code), far from it (area
-/// sampling in lanes), behind it (no sample), among lights of every other kind (sphere, disk,
-/// environment: the scalar code), and with lanes left out of the batch.
+/// sampling in lanes), behind it (no sample), from outside spheres (cone sampling in lanes)
+/// and inside them (the scalar code), among lights of other kinds (disk, environment: the
+/// scalar code), and with lanes left out of the batch.
 #[test]
 fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
     use crate::lights::LIGHT_LANES;

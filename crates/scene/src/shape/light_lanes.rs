@@ -8,13 +8,15 @@
 //! lane after another. Here the same formulas run over sixteen lanes
 //! ([`radia_math::lanes`], whose operations are the scalar ones in the same order), so every
 //! lane holds bit for bit what the scalar code gives. Lanes whose triangle is to be sampled
-//! by solid angle are left to the scalar code ([`TriangleSamples::by_area`] says which were
-//! done here).
+//! by solid angle are left to the scalar code ([`LaneSamples::done`] says which were
+//! done here). Spheres seen from outside (sampled in the cone they subtend) are done the
+//! same way ([`LightSpheres`]).
 
 use super::{LightTriangle, MAX_SPHERICAL_SAMPLE_AREA, MIN_SPHERICAL_SAMPLE_AREA};
 use glam::{Vec2, Vec3};
 use radia_math::float::gamma;
-use radia_math::lanes::{f32x16, Vec3s, WIDTH};
+use radia_math::lanes::{self, f32x16, Vec3s, WIDTH};
+use radia_math::INV_TWO_PI;
 
 type Rows = [[f32; WIDTH]; 3];
 
@@ -36,11 +38,12 @@ pub(crate) struct LightTriangles {
     u: [[f32; WIDTH]; 2],
 }
 
-/// What [`LightTriangles::sample`] found: per lane, the fields of the `DirectionSample` the
-/// scalar code returns.
-pub(crate) struct TriangleSamples {
-    /// Lanes sampled by area here (the others are to be sampled by solid angle).
-    pub by_area: u32,
+/// What [`LightTriangles::sample`] or [`LightSpheres::sample`] found: per lane, the fields of
+/// the `DirectionSample` the scalar code returns.
+pub(crate) struct LaneSamples {
+    /// Lanes sampled here (the others are left to the scalar code: triangles to be sampled
+    /// by solid angle, spheres seen from inside).
+    pub done: u32,
     /// Of those, the lanes whose sample is valid (finite, positive density, seen from the
     /// front of the triangle: otherwise the scalar code returns no sample).
     pub valid: u32,
@@ -53,7 +56,7 @@ pub(crate) struct TriangleSamples {
     pub pdf: [f32; WIDTH],
 }
 
-impl TriangleSamples {
+impl LaneSamples {
     #[inline(always)]
     pub fn p(&self, k: usize) -> Vec3 {
         row(&self.p, k)
@@ -123,7 +126,7 @@ impl LightTriangles {
     /// area sampling, `sample_position` and `seen_from` of `shape.rs` and the front-side
     /// test of the area light, each operation as there.
     #[inline]
-    pub(crate) fn sample(&self) -> TriangleSamples {
+    pub(crate) fn sample(&self) -> LaneSamples {
         let ref_p = Vec3s::from_rows(&self.ref_p);
         let n = Vec3s::from_rows(&self.n);
 
@@ -138,7 +141,7 @@ impl LightTriangles {
         let estimate = f32x16::splat(0.5) * Vec3s::from_rows(&self.twice_area_n).dot(to_c).abs()
             / (d2 * d2.sqrt());
         let small = estimate.simd_ge(f32x16::splat(MIN_SPHERICAL_SAMPLE_AREA));
-        let by_area = self.lanes & (far & !small).to_bitmask();
+        let done = self.lanes & (far & !small).to_bitmask();
 
         // ---- `sample_position`: uniform on the triangle ----
         let (u0, u1) = (f32x16::new(self.u[0]), f32x16::new(self.u[1]));
@@ -169,16 +172,131 @@ impl LightTriangles {
         let finite = pdf.is_finite() & pdf.simd_gt(f32x16::ZERO);
         // The area light's own test: no light seen from behind.
         let front = !cos.simd_ge(f32x16::ZERO);
-        let valid = by_area & (finite & front).to_bitmask();
+        let valid = done & (finite & front).to_bitmask();
 
-        TriangleSamples {
-            by_area,
+        LaneSamples {
+            done,
             valid,
             p: p.to_rows(),
             p_error: p_error.to_rows(),
             n: self.n,
             d: d.to_rows(),
             dist: dist.to_array(),
+            pdf: pdf.to_array(),
+        }
+    }
+}
+
+/// Light samples to draw on spheres seen from outside, gathered lane by lane
+/// ([`LightSpheres::push`]): `SphereCone::new` and `SphereCone::sample` of `shape.rs` in
+/// lanes. Lanes inside (or on) their sphere are left to the scalar code.
+pub(crate) struct LightSpheres {
+    lanes: u32,
+    center: Rows,
+    radius: [f32; WIDTH],
+    flipped: u32,
+    ref_p: Rows,
+    u: [[f32; WIDTH]; 2],
+}
+
+impl LightSpheres {
+    pub(crate) fn new() -> Self {
+        Self {
+            lanes: 0,
+            center: [[0.0; WIDTH]; 3],
+            radius: [0.0; WIDTH],
+            flipped: 0,
+            ref_p: [[0.0; WIDTH]; 3],
+            u: [[0.0; WIDTH]; 2],
+        }
+    }
+
+    /// Lanes pushed.
+    #[inline(always)]
+    pub(crate) fn lanes(&self) -> u32 {
+        self.lanes
+    }
+
+    /// Lane `k` samples the sphere (`center`, `radius`, `flip_normals`) from `ref_p` with the
+    /// values `u`.
+    #[inline(always)]
+    pub(crate) fn push(
+        &mut self,
+        k: usize,
+        (center, radius, flip_normals): (Vec3, f32, bool),
+        ref_p: Vec3,
+        u: Vec2,
+    ) {
+        self.lanes |= 1 << k;
+        set(&mut self.center, k, center);
+        self.radius[k] = radius;
+        self.flipped |= u32::from(flip_normals) << k;
+        set(&mut self.ref_p, k, ref_p);
+        (self.u[0][k], self.u[1][k]) = (u.x, u.y);
+    }
+
+    /// The samples of the pushed lanes seen from outside their sphere, in the cone it
+    /// subtends.
+    #[inline]
+    pub(crate) fn sample(&self) -> LaneSamples {
+        let center = Vec3s::from_rows(&self.center);
+        let ref_p = Vec3s::from_rows(&self.ref_p);
+        let radius = f32x16::new(self.radius);
+
+        // ---- `SphereCone::new` ----
+        let to_c = center - ref_p;
+        let dist2 = to_c.length_squared();
+        let r2 = radius * radius;
+        let outside = dist2.simd_gt(r2 * f32x16::splat(1.0 + 1e-4));
+        let done = self.lanes & outside.to_bitmask();
+        let sin2_max = r2 / dist2;
+        let one_minus_cos_max = sin2_max / (f32x16::ONE + (f32x16::ONE - sin2_max).sqrt());
+        let pdf = f32x16::splat(INV_TWO_PI) / one_minus_cos_max;
+
+        // ---- `SphereCone::sample` ----
+        let (u0, u1) = (f32x16::new(self.u[0]), f32x16::new(self.u[1]));
+        let omc = u0 * one_minus_cos_max;
+        let cos_theta = f32x16::ONE - omc;
+        let sin2_theta = omc * (f32x16::splat(2.0) - omc);
+        let sin_theta = sin2_theta.sqrt();
+        let (sin_phi, cos_phi) = lanes::sin_cos_turns(u1);
+        let axis = to_c.normalize();
+        let (s, t) = lanes::coordinate_system(axis);
+        // `Frame::to_world`: s·x + t·y + n·z.
+        let d = s * (sin_theta * cos_phi) + t * (sin_theta * sin_phi) + axis * cos_theta;
+        let reach = (dist2 - radius * radius)
+            / (dist2.sqrt() * cos_theta
+                + radius
+                    * (f32x16::ONE - sin2_theta / sin2_max)
+                        .max(f32x16::ZERO)
+                        .sqrt());
+        let along = d * reach;
+        let p = ref_p + along;
+        let outward = (p - center).normalize();
+        let n = Vec3s::select(lanes::mask(self.flipped), -outward, outward);
+        // `cone_point_error`.
+        let p_error = (ref_p.abs()
+            + along.abs()
+            + center.abs()
+            + Vec3s {
+                x: radius,
+                y: radius,
+                z: radius,
+            })
+            * f32x16::splat(gamma(16));
+        let hit = reach.is_finite() & reach.simd_gt(f32x16::ZERO);
+        // The area light's own test: no light seen from behind.
+        let front = !n.dot(d).simd_ge(f32x16::ZERO);
+        let valid = done & (hit & front).to_bitmask();
+
+        LaneSamples {
+            done: done,
+            valid,
+            p: p.to_rows(),
+            p_error: p_error.to_rows(),
+            n: n.to_rows(),
+            d: d.to_rows(),
+            dist: reach.to_array(),
             pdf: pdf.to_array(),
         }
     }
