@@ -6,7 +6,7 @@ mod lanes;
 mod light_lanes;
 
 pub(crate) use lanes::{DiskHits, MeshHits, SphereHits};
-pub(crate) use light_lanes::{LightSpheres, LightTriangles};
+pub(crate) use light_lanes::{uniform_sphere_directions, LightSpheres, LightTriangles};
 
 use crate::accel::{Hit, Primitive};
 use crate::description::{Geometry, Mesh};

@@ -23,12 +23,14 @@ mod tests;
 pub use bvh::{BvhLight, LightBounds, LightBvh};
 
 use crate::emitter::{Emitter, EmitterSample};
-use crate::shape::{LightSpheres, LightTriangles, Shape, ShapeKind, SurfaceInteraction};
+use crate::shape::{
+    uniform_sphere_directions, LightSpheres, LightTriangles, Shape, ShapeKind, SurfaceInteraction,
+};
 use crate::Scene;
 use glam::{Vec2, Vec3};
 use radia_bsdf::Texture;
 use radia_math::Spectrum;
-use radia_sampling::DiscreteDistribution;
+use radia_sampling::{warp, DiscreteDistribution};
 
 /// Queries of [`Scene::sample_emitter_directions`].
 pub const LIGHT_LANES: usize = 16;
@@ -361,7 +363,7 @@ impl Scene {
     /// once: `out[k]` becomes, bit for bit, what it returns for `ctx[k]`, `u_sel[k]` and
     /// `u[k]` (other lanes are left as they are). The light is chosen lane by lane; area
     /// lights of constant radiance on flat triangles that are small seen from their lane and
-    /// on spheres seen from outside are then sampled in lanes
+    /// on spheres seen from outside, and constant environments, are then sampled in lanes
     /// ([`crate::shape::LightTriangles`], [`crate::shape::LightSpheres`]), every other light
     /// one lane at a time.
     pub fn sample_emitter_directions(
@@ -382,12 +384,21 @@ impl Scene {
             0.0,
         ); LIGHT_LANES];
         let mut radiance = [Spectrum::ZERO; LIGHT_LANES];
+        // Lanes that chose a constant environment, and their sample values.
+        let (mut uniform, mut uniform_u) = (0u32, [[0.0; LIGHT_LANES]; 2]);
         for k in lanes_of(active) {
             let Some((index, pmf)) = self.lights.sample(&ctx[k], u_sel[k]) else {
                 out[k] = None;
                 continue;
             };
             let prim = self.lights.prim(index);
+            if let Emitter::Constant(light) = &self.emitters[prim.emitter as usize] {
+                uniform |= 1 << k;
+                (uniform_u[0][k], uniform_u[1][k]) = (u[k].x, u[k].y);
+                chosen[k] = (prim, pmf);
+                radiance[k] = light.radiance;
+                continue;
+            }
             if let Emitter::Area(light) = &self.emitters[prim.emitter as usize] {
                 if let Texture::Constant(c) = light.radiance {
                     let shape = &self.shapes[light.shape as usize];
@@ -408,6 +419,21 @@ impl Scene {
                 }
             }
             out[k] = self.sample_light_prim(prim, pmf, ctx[k].p, u[k]);
+        }
+        if uniform != 0 {
+            let d = uniform_sphere_directions(&uniform_u);
+            for k in lanes_of(uniform) {
+                out[k] = Some(EmitterSample {
+                    d: Vec3::new(d[0][k], d[1][k], d[2][k]),
+                    dist: f32::INFINITY,
+                    p: Vec3::ZERO,
+                    n: Vec3::ZERO,
+                    p_error: Vec3::ZERO,
+                    pdf: warp::uniform_sphere_pdf() * chosen[k].1,
+                    radiance: radiance[k],
+                    is_delta: false,
+                });
+            }
         }
         for (lanes, samples) in [
             (

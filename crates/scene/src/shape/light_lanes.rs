@@ -301,3 +301,19 @@ impl LightSpheres {
         }
     }
 }
+
+/// `warp::square_to_uniform_sphere` of the values `u[0][lane]`, `u[1][lane]` in lanes: the
+/// directions a constant environment samples (`ConstantLight::sample_direction`).
+#[inline]
+pub(crate) fn uniform_sphere_directions(u: &[[f32; WIDTH]; 2]) -> Rows {
+    let (u0, u1) = (f32x16::new(u[0]), f32x16::new(u[1]));
+    let z = f32x16::ONE - f32x16::splat(2.0) * u1;
+    let r = (f32x16::ONE - z * z).max(f32x16::ZERO).sqrt();
+    let (s, c) = lanes::sin_cos_turns(u0);
+    Vec3s {
+        x: r * c,
+        y: r * s,
+        z,
+    }
+    .to_rows()
+}
