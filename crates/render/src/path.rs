@@ -12,11 +12,11 @@
 //! through holes; Mitsuba 3.9.1 hides the environment there but shows area emitters, as its
 //! `skip_area_emitters` runs only before the first intersection).
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use radia_bsdf::ShadingPoint;
 use radia_math::{max_component, Ray, Spectrum};
 use radia_sampling::{mis::power_heuristic, SampleStream, Sampler};
-use radia_scene::{EmitterSample, LightContext, Scene, ShadowEnds, SurfaceInteraction};
+use radia_scene::{LightContext, Scene, ShadowEnds, SurfaceInteraction};
 
 /// The sample dimensions of a path (see `radia_sampling::sampler`): the camera's block, then
 /// one block of [`BOUNCE_DIMS`] values per bounce, whether or not a bounce uses them all, so
@@ -103,9 +103,9 @@ impl PathIntegrator {
         };
         loop {
             stats.rays += 1;
-            let mut hit = scene.intersect(&path.ray);
+            let hit = scene.intersect(&path.ray);
             let mut shadow = None;
-            let goes_on = self.bounce(scene, &mut path, &mut hit, sampler, stats, &mut shadow);
+            let goes_on = self.bounce(scene, &mut path, hit.as_ref(), sampler, stats, &mut shadow);
             if let Some(shadow) = &shadow {
                 let transmittance = scene.transmittance(&shadow.ends.ray(), shadow.crossings);
                 shadow.resolve(&mut path, transmittance);
@@ -138,56 +138,34 @@ impl PathIntegrator {
     }
 
     /// One step of the path at `hit`, the closest hit of `path.ray` (already traced and
-    /// counted): [`PathIntegrator::arrive`], the light sample of its next-event estimate
-    /// ([`Scene::sample_emitter_direction`]), then [`PathIntegrator::scatter`]. The
-    /// estimate's shadow ray is written to `shadow` (which must be `None` on entry), to be
-    /// traced and [`PendingShadow::resolve`]d before the next step. Returns false when the
-    /// path ends here. The packet loop (`crate::wavefront`) runs each stage for all its lanes
-    /// before the next, the light samples sixteen at once.
+    /// counted): the emission found there, a next-event estimate (written to `shadow`, which
+    /// must be `None` on entry, for its shadow ray to be traced and
+    /// [`PendingShadow::resolve`]d before the next step), the BSDF sample that gives the next
+    /// ray, and Russian roulette. Returns false when the path ends here.
+    ///
+    /// (The estimate is written in place rather than returned: the packet loop copied a
+    /// returned one into its lane through the stack, and that copy stalled on store
+    /// forwarding, 12% of the loop's own time on `scenes/furnace.xml`.)
     #[inline]
     pub(crate) fn bounce<S: Sampler>(
         &self,
         scene: &Scene,
         path: &mut PathState,
-        hit: &mut Option<SurfaceInteraction>,
+        hit: Option<&SurfaceInteraction>,
         sampler: &mut SampleStream<'_, S>,
         stats: &mut PathStats,
         shadow: &mut Option<PendingShadow>,
     ) -> bool {
-        let mut query = None;
-        if !self.arrive(scene, path, hit, sampler, stats, &mut query) {
-            return false;
-        }
-        let light = query
-            .as_ref()
-            .map(|q: &LightQuery| (q, scene.sample_emitter_direction(&q.ctx, q.u_sel, q.u)));
-        let si = hit.as_ref().expect("a path that arrives scatters at a hit");
-        let light = light.as_ref().map(|(q, es)| (*q, es.as_ref()));
-        self.scatter(scene, path, si, light, sampler, stats, shadow)
-    }
-
-    /// The first stage of a step: the emission found at `hit` (or, escaped, the
-    /// environment's), and the values of the next-event estimate's light sample, written to
-    /// `query` (which must be `None` on entry) when the BSDF at the hit has a lobe to
-    /// estimate. With `hide_emitters`, a camera ray's `hit` is replaced by the first surface
-    /// behind the area emitters it meets. Returns false when the path ends here.
-    ///
-    /// (The hit is borrowed, not moved: a copy of the record made just before its fields
-    /// are read stalls on store forwarding, measured in the packet loop.)
-    #[inline]
-    pub(crate) fn arrive<S: Sampler>(
-        &self,
-        scene: &Scene,
-        path: &mut PathState,
-        hit: &mut Option<SurfaceInteraction>,
-        sampler: &mut SampleStream<'_, S>,
-        stats: &mut PathStats,
-        query: &mut Option<LightQuery>,
-    ) -> bool {
-        if self.hide_emitters && path.primary {
-            *hit = skip_area_emitters(scene, &mut path.ray, *hit, stats);
-        }
-        let Some(si) = hit.as_ref() else {
+        // (Borrowed, not moved: a copy of the record made just before its fields are read
+        // stalls on store forwarding, measured in the packet loop.)
+        let skipped;
+        let hit = if self.hide_emitters && path.primary {
+            skipped = skip_area_emitters(scene, &mut path.ray, hit.copied(), stats);
+            skipped.as_ref()
+        } else {
+            hit
+        };
+        let Some(si) = hit else {
             // ---- Escaped: environment emission (none without an environment) ----
             // With hide_emitters an escaped camera ray gives 0 (path.cpp's `valid_ray`).
             if let Some(env) = scene.environment {
@@ -219,53 +197,18 @@ impl PathIntegrator {
             return false;
         }
 
-        // ---- The light sample's values (next-event estimation) ----
-        if scene.bsdf(si).flags().has_smooth() && self.has_lights {
-            let depth = path.depth;
-            sampler.seek(layout::bounce(depth) + layout::LIGHT_POSITION);
-            let u = sampler.next_2d();
-            let u_sel = if scene.lights.choice_uses_sample() {
-                sampler.next_1d()
-            } else {
-                0.5
-            };
-            *query = Some(LightQuery {
-                ctx: LightContext {
-                    p: si.p,
-                    n: si.frame.n,
-                },
-                u_sel,
-                u,
-                // Shadow rays may cross null surfaces, each a bounce (see the module docs).
-                crossings: self.max_depth.saturating_sub(depth + 2),
-            });
-        }
-        true
-    }
-
-    /// The last stage of a step at `si`, after [`PathIntegrator::arrive`] returned true:
-    /// the next-event estimate of `light` (the query `arrive` made and its light sample, if
-    /// any) up to its shadow ray, the BSDF sample that gives the next ray, and Russian
-    /// roulette. Returns false when the path ends here.
-    #[inline]
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn scatter<S: Sampler>(
-        &self,
-        scene: &Scene,
-        path: &mut PathState,
-        si: &SurfaceInteraction,
-        light: Option<(&LightQuery, Option<&EmitterSample>)>,
-        sampler: &mut SampleStream<'_, S>,
-        stats: &mut PathStats,
-        shadow: &mut Option<PendingShadow>,
-    ) -> bool {
         let bsdf = scene.bsdf(si);
         let sp = scene.shading_point(si);
         let depth = path.depth;
 
         // ---- Emitter sampling (next-event estimation) ----
-        if let Some((q, es)) = light {
-            match self.estimate(si, &sp, bsdf, q.crossings, es, path.beta, shadow) {
+        if bsdf.flags().has_smooth() && self.has_lights {
+            sampler.seek(layout::bounce(depth) + layout::LIGHT_POSITION);
+            // Shadow rays may cross null surfaces, each a bounce (see the module docs).
+            let crossings = self.max_depth.saturating_sub(depth + 2);
+            let found =
+                self.sample_emitter(scene, si, &sp, bsdf, crossings, path.beta, sampler, shadow);
+            match found {
                 Some(()) => stats.rays += 1,
                 // Nothing to trace: the estimate is 0, added as the full estimate would be
                 // (β · 0 is not 0 for a β that is not finite).
@@ -335,26 +278,38 @@ impl PathIntegrator {
         power_heuristic(prev.bsdf_pdf, pdf_em(&ctx))
     }
 
-    /// The next-event estimate of the light sample `es` (none: the light sample failed) up
-    /// to its shadow ray: L·f·cos / pdf with the MIS weight, to be multiplied by the shadow
-    /// ray's transmittance (through at most `crossings` null surfaces), written to `out`;
-    /// left `None` when the estimate is 0 whatever the shadow ray. Delta lights need no MIS
-    /// (BSDF sampling never finds them), so no BSDF pdf either.
+    /// One next-event estimation sample up to its shadow ray: L·f·cos / pdf with the MIS
+    /// weight, to be multiplied by the shadow ray's transmittance (through at most
+    /// `crossings` null surfaces), written to `out`; left `None` when the estimate is 0
+    /// whatever the shadow ray. Delta lights need no MIS (BSDF sampling never finds them), so
+    /// no BSDF pdf either.
     #[inline]
     #[allow(clippy::too_many_arguments)]
-    fn estimate(
+    fn sample_emitter<S: Sampler>(
         &self,
+        scene: &Scene,
         si: &SurfaceInteraction,
         sp: &ShadingPoint,
         bsdf: &radia_bsdf::Bsdf,
         crossings: u32,
-        es: Option<&EmitterSample>,
         beta: Spectrum,
+        sampler: &mut SampleStream<'_, S>,
         out: &mut Option<PendingShadow>,
     ) -> Option<()> {
+        let u = sampler.next_2d();
+        let u_sel = if scene.lights.choice_uses_sample() {
+            sampler.next_1d()
+        } else {
+            0.5
+        };
+        let ctx = LightContext {
+            p: si.p,
+            n: si.frame.n,
+        };
         // Read in place: moving the record out of the Option just after the callee wrote it
         // field by field stalls on store forwarding (measured: 6% of the packet loop).
-        let es = es?;
+        let sample = scene.sample_emitter_direction(&ctx, u_sel, u);
+        let es = sample.as_ref()?;
         let wo = si.frame.to_local(es.d);
         let (f, w) = if es.is_delta {
             (bsdf.eval(sp, si.wi, wo), 1.0)
@@ -377,16 +332,6 @@ impl PathIntegrator {
         slot.pdf = es.pdf;
         Some(())
     }
-}
-
-/// What a next-event estimate samples its light with: where from, and its sample values.
-#[derive(Clone, Copy)]
-pub(crate) struct LightQuery {
-    pub ctx: LightContext,
-    pub u_sel: f32,
-    pub u: Vec2,
-    /// Null surfaces the shadow ray may cross.
-    crossings: u32,
 }
 
 /// One path in flight: what [`PathIntegrator::li`]'s loop carries from bounce to bounce.

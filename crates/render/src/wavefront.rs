@@ -10,17 +10,13 @@
 //! the image is the one `li` renders, bit for bit.
 
 use crate::integrator::{CameraSample, Traced};
-use crate::path::{LightQuery, PathIntegrator, PathState, PathStats, PendingShadow};
-use glam::{Vec2, Vec3};
+use crate::path::{PathIntegrator, PathState, PathStats, PendingShadow};
+use glam::Vec2;
 use radia_sampling::{SampleStream, Sampler};
-use radia_scene::lights::LIGHT_LANES;
-use radia_scene::{
-    EmitterSample, LightContext, RayPacket, Scene, ShadowLanes, SurfaceInteraction, PACKET_LANES,
-};
+use radia_scene::{RayPacket, Scene, ShadowLanes, SurfaceInteraction, PACKET_LANES};
 
 /// Paths in flight per packet.
 pub const LANES: usize = PACKET_LANES;
-const _: () = assert!(LANES == LIGHT_LANES);
 
 /// A path in flight and where its result goes.
 struct Lane<'a, S> {
@@ -48,13 +44,6 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
     // Made once: each step clears the active lanes only (stale rays in inactive lanes are
     // ignored), not the whole packet (its zeroing was 1.6% of the loop).
     let (mut rays, mut shadows) = (RayPacket::new(), RayPacket::new());
-    // The light queries of a step, by lane (stale in lanes that ask nothing).
-    let mut light_ctx = [LightContext {
-        p: Vec3::ZERO,
-        n: Vec3::ZERO,
-    }; LANES];
-    let (mut light_u_sel, mut light_u) = ([0.0; LANES], [Vec2::ZERO; LANES]);
-    let mut light_samples: [Option<EmitterSample>; LANES] = [None; LANES];
     loop {
         // ---- Free lanes take the next camera samples ----
         // Their rays are made afterwards, sixteen at once (`Camera::generate_rays`): a camera
@@ -114,52 +103,17 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         stats.rays += u64::from(rays.active.count_ones());
         scene.intersect_packet(&rays, &mut hits);
 
-        // ---- Each path's step (`PathIntegrator::bounce`), one stage for all lanes before
-        // the next, the light samples sixteen at once ----
-        // Rays as `li` counts them: the closest hit (above), and those the step traces or
-        // will (shadow ray, emitters skipped).
+        // ---- Each path's bounce: emission, NEE sample, BSDF sample ----
         let mut goes_on = [false; LANES];
-        let mut queries: [Option<LightQuery>; LANES] = [None; LANES];
-        let mut asks = 0u32;
         for (k, lane) in lanes.iter_mut().enumerate() {
             if let Some(lane) = lane {
+                // Its rays as `li` counts them: the closest hit (above), and those the
+                // bounce traces or will (shadow ray, emitters skipped).
                 let before = stats.rays;
-                goes_on[k] = integrator.arrive(
+                goes_on[k] = integrator.bounce(
                     scene,
                     &mut lane.path,
-                    &mut hits[k],
-                    &mut lane.stream,
-                    stats,
-                    &mut queries[k],
-                );
-                lane.rays += (stats.rays - before) as u32;
-                if let Some(q) = &queries[k] {
-                    asks |= 1 << k;
-                    (light_ctx[k], light_u_sel[k], light_u[k]) = (q.ctx, q.u_sel, q.u);
-                }
-            }
-        }
-        if asks != 0 {
-            scene.sample_emitter_directions(
-                asks,
-                &light_ctx,
-                &light_u_sel,
-                &light_u,
-                &mut light_samples,
-            );
-        }
-        for (k, lane) in lanes.iter_mut().enumerate() {
-            if let (Some(lane), true) = (lane, goes_on[k]) {
-                let before = stats.rays;
-                let si = hits[k]
-                    .as_ref()
-                    .expect("a path that arrives scatters at a hit");
-                let light = queries[k].as_ref().map(|q| (q, light_samples[k].as_ref()));
-                goes_on[k] = integrator.scatter(
-                    scene,
-                    &mut lane.path,
-                    si,
-                    light,
+                    hits[k].as_ref(),
                     &mut lane.stream,
                     stats,
                     &mut lane.shadow,
