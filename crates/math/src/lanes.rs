@@ -32,6 +32,12 @@ impl Vec3s {
         }
     }
 
+    /// The same value `s` in all three components (glam's `Vec3::splat`, lane by lane).
+    #[inline(always)]
+    pub fn splat_lanes(s: f32x16) -> Self {
+        Self { x: s, y: s, z: s }
+    }
+
     /// From the components of each lane, `rows[axis][lane]`.
     #[inline(always)]
     pub fn from_rows(rows: &[[f32; WIDTH]; 3]) -> Self {

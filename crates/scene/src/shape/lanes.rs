@@ -27,6 +27,24 @@ const _: () = assert!(WIDTH == PACKET_LANES);
 
 type Rows = [[f32; WIDTH]; 3];
 
+/// shape.rs' `triangle_point` in lanes: v0 + b1·e1 + b2·e2 and its error bound.
+#[inline(always)]
+pub(super) fn triangle_point(
+    v0: Vec3s,
+    e1: Vec3s,
+    e2: Vec3s,
+    b1: f32x16,
+    b2: f32x16,
+) -> (Vec3s, Vec3s) {
+    let p = v0 + (e1 * b1 + e2 * b2);
+    let extent = (e1.abs() + e2.abs()).max_element();
+    let slack = extent * f32x16::splat(gamma(32));
+    (
+        p,
+        p.abs() * f32x16::splat(gamma(1)) + Vec3s::splat_lanes(slack),
+    )
+}
+
 /// The hits of a packet on mesh triangles, gathered lane by lane ([`MeshHits::push`]).
 pub(crate) struct MeshHits {
     /// Lanes pushed.
@@ -124,16 +142,8 @@ impl MeshHits {
         let dp0 = v[1] - v[0];
         let dp1 = v[2] - v[0];
 
-        // The point and its error bound (shape.rs' `triangle_point`).
-        let p = v[0] + (dp0 * b1 + dp1 * b2);
-        let extent = (dp0.abs() + dp1.abs()).max_element();
-        let slack = extent * f32x16::splat(gamma(32));
-        let p_error = p.abs() * f32x16::splat(gamma(1))
-            + Vec3s {
-                x: slack,
-                y: slack,
-                z: slack,
-            };
+        // The point and its error bound.
+        let (p, p_error) = triangle_point(v[0], dp0, dp1, b1, b2);
 
         // Normals: geometric, and interpolated where the mesh has them (falling back to the
         // geometric one where the interpolation is not finite).

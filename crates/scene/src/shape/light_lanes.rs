@@ -12,6 +12,7 @@
 //! done here). Spheres seen from outside (sampled in the cone they subtend) are done the
 //! same way ([`LightSpheres`]).
 
+use super::lanes::triangle_point;
 use super::{LightTriangle, MAX_SPHERICAL_SAMPLE_AREA, MIN_SPHERICAL_SAMPLE_AREA};
 use glam::{Vec2, Vec3};
 use radia_math::float::gamma;
@@ -150,16 +151,7 @@ impl LightTriangles {
         let v0 = Vec3s::from_rows(&self.v[0]);
         let e1 = Vec3s::from_rows(&self.v[1]) - v0;
         let e2 = Vec3s::from_rows(&self.v[2]) - v0;
-        // `triangle_point`.
-        let p = v0 + (e1 * b1 + e2 * b2);
-        let extent = (e1.abs() + e2.abs()).max_element();
-        let slack = extent * f32x16::splat(gamma(32));
-        let p_error = p.abs() * f32x16::splat(gamma(1))
-            + Vec3s {
-                x: slack,
-                y: slack,
-                z: slack,
-            };
+        let (p, p_error) = triangle_point(v0, e1, e2, b1, b2);
         let pdf_area = f32x16::ONE / f32x16::new(self.area);
 
         // ---- `seen_from`: the density in solid angle ----
@@ -275,14 +267,7 @@ impl LightSpheres {
         let outward = (p - center).normalize();
         let n = Vec3s::select(lanes::mask(self.flipped), -outward, outward);
         // `cone_point_error`.
-        let p_error = (ref_p.abs()
-            + along.abs()
-            + center.abs()
-            + Vec3s {
-                x: radius,
-                y: radius,
-                z: radius,
-            })
+        let p_error = (ref_p.abs() + along.abs() + center.abs() + Vec3s::splat_lanes(radius))
             * f32x16::splat(gamma(16));
         let hit = reach.is_finite() & reach.simd_gt(f32x16::ZERO);
         // The area light's own test: no light seen from behind.
