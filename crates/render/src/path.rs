@@ -12,11 +12,11 @@
 //! through holes; Mitsuba 3.9.1 hides the environment there but shows area emitters, as its
 //! `skip_area_emitters` runs only before the first intersection).
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use radia_bsdf::ShadingPoint;
 use radia_math::{max_component, Ray, Spectrum};
 use radia_sampling::{mis::power_heuristic, SampleStream, Sampler};
-use radia_scene::{LightContext, Scene, ShadowEnds, SurfaceInteraction};
+use radia_scene::{EmitterSample, LightContext, Scene, ShadowEnds, SurfaceInteraction};
 
 /// The sample dimensions of a path (see `radia_sampling::sampler`): the camera's block, then
 /// one block of [`BOUNCE_DIMS`] values per bounce, whether or not a bounce uses them all, so
@@ -58,6 +58,9 @@ pub struct PathIntegrator {
     /// Next-event estimation has something to sample (`scene.lights`, which also decides
     /// which light: radia's light BVH by default, Mitsuba's uniform choice on request).
     has_lights: bool,
+    /// The packet loop samples its lanes' lights together
+    /// ([`Scene::samples_lights_in_lanes`]).
+    batch_lights: bool,
 }
 
 /// Where the previous bounce left from, for MIS on emitters hit by BSDF sampling (null
@@ -83,6 +86,7 @@ impl PathIntegrator {
             rr_depth: cfg.rr_depth.max(0) as u32,
             hide_emitters: cfg.hide_emitters,
             has_lights: !scene.lights.is_empty(),
+            batch_lights: scene.samples_lights_in_lanes(),
         }
     }
 
@@ -105,7 +109,15 @@ impl PathIntegrator {
             stats.rays += 1;
             let hit = scene.intersect(&path.ray);
             let mut shadow = None;
-            let goes_on = self.bounce(scene, &mut path, hit.as_ref(), sampler, stats, &mut shadow);
+            let goes_on = self.bounce(
+                scene,
+                &mut path,
+                hit.as_ref(),
+                None,
+                sampler,
+                stats,
+                &mut shadow,
+            );
             if let Some(shadow) = &shadow {
                 let transmittance = scene.transmittance(&shadow.ends.ray(), shadow.crossings);
                 shadow.resolve(&mut path, transmittance);
@@ -137,11 +149,78 @@ impl PathIntegrator {
         })
     }
 
+    /// Whether the packet loop samples its lanes' lights together
+    /// ([`Scene::samples_lights_in_lanes`]; [`PathIntegrator::light_query`] says `None`
+    /// otherwise).
+    #[inline(always)]
+    pub(crate) fn batches_lights(&self) -> bool {
+        self.batch_lights
+    }
+
+    /// The light sample's values of the next-event estimate that [`PathIntegrator::bounce`]
+    /// will make at `hit`: where from, the choice value and the position values. `None` when
+    /// the bounce makes no estimate there, for camera rays under `hide_emitters` (whose
+    /// hit the bounce may still replace: those sample their light in the bounce), and in
+    /// scenes whose lights are not all sampled in lanes (the bounce samples them). The
+    /// packet loop samples the lights of all its lanes at once from these
+    /// ([`Scene::sample_emitter_directions`]) before their bounces.
+    #[inline]
+    pub(crate) fn light_query<S: Sampler>(
+        &self,
+        scene: &Scene,
+        path: &PathState,
+        hit: Option<&SurfaceInteraction>,
+        sampler: &mut SampleStream<'_, S>,
+    ) -> Option<(LightContext, f32, Vec2)> {
+        let si = hit?;
+        if !self.batch_lights
+            || (self.hide_emitters && path.primary)
+            || path.depth + 1 >= self.max_depth
+            || !self.estimates(scene.bsdf(si))
+        {
+            return None;
+        }
+        let (u_sel, u) = self.light_values(scene, path.depth, sampler);
+        let ctx = LightContext {
+            p: si.p,
+            n: si.frame.n,
+        };
+        Some((ctx, u_sel, u))
+    }
+
+    /// Whether a bounce that scatters by `bsdf` makes a next-event estimate.
+    #[inline(always)]
+    fn estimates(&self, bsdf: &radia_bsdf::Bsdf) -> bool {
+        bsdf.flags().has_smooth() && self.has_lights
+    }
+
+    /// The light sample's choice and position values at bounce `depth`.
+    #[inline(always)]
+    fn light_values<S: Sampler>(
+        &self,
+        scene: &Scene,
+        depth: u32,
+        sampler: &mut SampleStream<'_, S>,
+    ) -> (f32, Vec2) {
+        sampler.seek(layout::bounce(depth) + layout::LIGHT_POSITION);
+        let u = sampler.next_2d();
+        let u_sel = if scene.lights.choice_uses_sample() {
+            sampler.next_1d()
+        } else {
+            0.5
+        };
+        (u_sel, u)
+    }
+
     /// One step of the path at `hit`, the closest hit of `path.ray` (already traced and
     /// counted): the emission found there, a next-event estimate (written to `shadow`, which
     /// must be `None` on entry, for its shadow ray to be traced and
     /// [`PendingShadow::resolve`]d before the next step), the BSDF sample that gives the next
     /// ray, and Russian roulette. Returns false when the path ends here.
+    ///
+    /// `light` is the estimate's light sample when it was made already, from the values of
+    /// [`PathIntegrator::light_query`] (`Some(None)`: the light sample failed); `None` to
+    /// make it here.
     ///
     /// (The estimate is written in place rather than returned: the packet loop copied a
     /// returned one into its lane through the stack, and that copy stalled on store
@@ -152,6 +231,7 @@ impl PathIntegrator {
         scene: &Scene,
         path: &mut PathState,
         hit: Option<&SurfaceInteraction>,
+        light: Option<&Option<EmitterSample>>,
         sampler: &mut SampleStream<'_, S>,
         stats: &mut PathStats,
         shadow: &mut Option<PendingShadow>,
@@ -202,12 +282,26 @@ impl PathIntegrator {
         let depth = path.depth;
 
         // ---- Emitter sampling (next-event estimation) ----
-        if bsdf.flags().has_smooth() && self.has_lights {
-            sampler.seek(layout::bounce(depth) + layout::LIGHT_POSITION);
+        if self.estimates(bsdf) {
             // Shadow rays may cross null surfaces, each a bounce (see the module docs).
             let crossings = self.max_depth.saturating_sub(depth + 2);
-            let found =
-                self.sample_emitter(scene, si, &sp, bsdf, crossings, path.beta, sampler, shadow);
+            let made;
+            let es = match light {
+                Some(es) => es.as_ref(),
+                None => {
+                    let (u_sel, u) = self.light_values(scene, depth, sampler);
+                    let ctx = LightContext {
+                        p: si.p,
+                        n: si.frame.n,
+                    };
+                    // Read in place: moving the record out of the Option just after the
+                    // callee wrote it field by field stalls on store forwarding (measured:
+                    // 6% of the packet loop).
+                    made = scene.sample_emitter_direction(&ctx, u_sel, u);
+                    made.as_ref()
+                }
+            };
+            let found = self.estimate(si, &sp, bsdf, crossings, es, path.beta, shadow);
             match found {
                 Some(()) => stats.rays += 1,
                 // Nothing to trace: the estimate is 0, added as the full estimate would be
@@ -278,38 +372,24 @@ impl PathIntegrator {
         power_heuristic(prev.bsdf_pdf, pdf_em(&ctx))
     }
 
-    /// One next-event estimation sample up to its shadow ray: L·f·cos / pdf with the MIS
-    /// weight, to be multiplied by the shadow ray's transmittance (through at most
-    /// `crossings` null surfaces), written to `out`; left `None` when the estimate is 0
-    /// whatever the shadow ray. Delta lights need no MIS (BSDF sampling never finds them), so
-    /// no BSDF pdf either.
-    #[inline]
+    /// The next-event estimate of the light sample `es` (`None`: the light sample failed)
+    /// up to its shadow ray: L·f·cos / pdf with the MIS weight, to be multiplied by the
+    /// shadow ray's transmittance (through at most `crossings` null surfaces), written to
+    /// `out`; left `None` when the estimate is 0 whatever the shadow ray. Delta lights need
+    /// no MIS (BSDF sampling never finds them), so no BSDF pdf either.
+    #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn sample_emitter<S: Sampler>(
+    fn estimate(
         &self,
-        scene: &Scene,
         si: &SurfaceInteraction,
         sp: &ShadingPoint,
         bsdf: &radia_bsdf::Bsdf,
         crossings: u32,
+        es: Option<&EmitterSample>,
         beta: Spectrum,
-        sampler: &mut SampleStream<'_, S>,
         out: &mut Option<PendingShadow>,
     ) -> Option<()> {
-        let u = sampler.next_2d();
-        let u_sel = if scene.lights.choice_uses_sample() {
-            sampler.next_1d()
-        } else {
-            0.5
-        };
-        let ctx = LightContext {
-            p: si.p,
-            n: si.frame.n,
-        };
-        // Read in place: moving the record out of the Option just after the callee wrote it
-        // field by field stalls on store forwarding (measured: 6% of the packet loop).
-        let sample = scene.sample_emitter_direction(&ctx, u_sel, u);
-        let es = sample.as_ref()?;
+        let es = es?;
         let wo = si.frame.to_local(es.d);
         let (f, w) = if es.is_delta {
             (bsdf.eval(sp, si.wi, wo), 1.0)

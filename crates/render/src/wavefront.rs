@@ -11,9 +11,11 @@
 
 use crate::integrator::{CameraSample, Traced};
 use crate::path::{PathIntegrator, PathState, PathStats, PendingShadow};
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 use radia_sampling::{SampleStream, Sampler};
-use radia_scene::{RayPacket, Scene, ShadowLanes, SurfaceInteraction, PACKET_LANES};
+use radia_scene::{
+    EmitterSample, LightContext, RayPacket, Scene, ShadowLanes, SurfaceInteraction, PACKET_LANES,
+};
 
 /// Paths in flight per packet.
 pub const LANES: usize = PACKET_LANES;
@@ -44,6 +46,13 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
     // Made once: each step clears the active lanes only (stale rays in inactive lanes are
     // ignored), not the whole packet (its zeroing was 1.6% of the loop).
     let (mut rays, mut shadows) = (RayPacket::new(), RayPacket::new());
+    // The light queries of a step, by lane (stale in lanes that ask nothing).
+    let mut light_ctx = [LightContext {
+        p: Vec3::ZERO,
+        n: Vec3::ZERO,
+    }; LANES];
+    let (mut light_u_sel, mut light_u) = ([0.0; LANES], [Vec2::ZERO; LANES]);
+    let mut light_samples: [Option<EmitterSample>; LANES] = [None; LANES];
     loop {
         // ---- Free lanes take the next camera samples ----
         // Their rays are made afterwards, sixteen at once (`Camera::generate_rays`): a camera
@@ -103,7 +112,34 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         stats.rays += u64::from(rays.active.count_ones());
         scene.intersect_packet(&rays, &mut hits);
 
-        // ---- Each path's bounce: emission, NEE sample, BSDF sample ----
+        // ---- The light samples of the bounces' next-event estimates, sixteen at once ----
+        // (Only in scenes whose lights are all sampled in lanes: elsewhere each bounce
+        // samples its own, `Scene::samples_lights_in_lanes`.)
+        let mut asks = 0u32;
+        for (k, lane) in lanes.iter_mut().enumerate() {
+            if !integrator.batches_lights() {
+                break;
+            }
+            if let Some(lane) = lane {
+                let query =
+                    integrator.light_query(scene, &lane.path, hits[k].as_ref(), &mut lane.stream);
+                if let Some(q) = query {
+                    (light_ctx[k], light_u_sel[k], light_u[k]) = q;
+                    asks |= 1 << k;
+                }
+            }
+        }
+        if asks != 0 {
+            scene.sample_emitter_directions(
+                asks,
+                &light_ctx,
+                &light_u_sel,
+                &light_u,
+                &mut light_samples,
+            );
+        }
+
+        // ---- Each path's bounce: emission, NEE, BSDF sample ----
         let mut goes_on = [false; LANES];
         for (k, lane) in lanes.iter_mut().enumerate() {
             if let Some(lane) = lane {
@@ -114,6 +150,7 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
                     scene,
                     &mut lane.path,
                     hits[k].as_ref(),
+                    (asks & (1 << k) != 0).then_some(&light_samples[k]),
                     &mut lane.stream,
                     stats,
                     &mut lane.shadow,

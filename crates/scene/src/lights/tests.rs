@@ -1479,3 +1479,23 @@ fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
         "{in_lanes} samples of {total} queries"
     );
 }
+
+#[test]
+fn lights_are_batched_only_where_every_one_is_sampled_in_lanes() {
+    let flat = || emitting(rectangle(0.5), Vec3::ONE);
+    let ball = || emitting(sphere(Vec3::new(2.0, 0.0, 1.0), 0.3, false), Vec3::ONE);
+    let env = || EmitterDesc::Constant {
+        radiance: Vec3::splat(0.1),
+    };
+    let bvh = LightSamplerKind::Bvh;
+    assert!(scene(vec![flat(), ball()], vec![], bvh).samples_lights_in_lanes());
+    assert!(scene(vec![flat()], vec![], bvh).samples_lights_in_lanes());
+    // An environment, a smooth-shaded mesh, a disk: some lanes would go one at a time.
+    assert!(!scene(vec![flat()], vec![env()], bvh).samples_lights_in_lanes());
+    assert!(
+        !scene(vec![flat(), emitting(smooth_cap(), Vec3::ONE)], vec![], bvh)
+            .samples_lights_in_lanes()
+    );
+    let round = emitting(disk(Vec3::ZERO, 0.4, Vec3::Z), Vec3::ONE);
+    assert!(!scene(vec![ball(), round], vec![], bvh).samples_lights_in_lanes());
+}
