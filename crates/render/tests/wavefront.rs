@@ -72,21 +72,37 @@ fn packets_of_paths_render_what_one_path_at_a_time_renders() {
         desc.film.width = RES;
         desc.film.height = RES;
         desc.film.filter = FilterDesc::Box;
-        let scene = Scene::build(desc);
-        for sampler in [SamplerKind::Independent, SamplerKind::Sobol] {
+        let scene = Scene::build(desc.clone());
+        let mut variants = vec![scene];
+        if variants[0].samples_lights_in_lanes() {
+            // Where the packet loop samples the lights ahead of the bounces: also with the
+            // emitters hidden from the camera (whose rays sample theirs in the bounce) and
+            // with paths too short for an estimate at the second vertex or at all.
+            for (hide_emitters, max_depth) in [(true, -1), (false, 1), (false, 2)] {
+                let mut d = desc.clone();
+                d.integrator.hide_emitters = hide_emitters;
+                d.integrator.max_depth = max_depth;
+                variants.push(Scene::build(d));
+            }
+        }
+        for (scene, sampler) in variants.iter().flat_map(|scene| {
+            [SamplerKind::Independent, SamplerKind::Sobol].map(|sampler| (scene, sampler))
+        }) {
             let options = RenderOptions {
                 spp: PASS_SPP,
                 seed: SEED,
                 sampler,
                 adaptive: false,
             };
-            let out = render(&scene, &options, &AtomicBool::new(false), &|_| {});
+            let out = render(scene, &options, &AtomicBool::new(false), &|_| {});
             assert_eq!(out.stats.spp, PASS_SPP);
             assert!(
-                bits(&out.image.pixels) == one_path_at_a_time(&scene, &options),
-                "{}, {}: the packet loop's image differs",
+                bits(&out.image.pixels) == one_path_at_a_time(scene, &options),
+                "{}, {}, hide_emitters {}, max_depth {}: the packet loop's image differs",
                 path.display(),
-                sampler.name()
+                sampler.name(),
+                scene.integrator.hide_emitters,
+                scene.integrator.max_depth,
             );
             compared += 1;
         }
