@@ -116,11 +116,9 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         // (Only in scenes whose lights are all sampled in lanes: elsewhere each bounce
         // samples its own, `Scene::samples_lights_in_lanes`.)
         let mut asks = 0u32;
-        for (k, lane) in lanes.iter_mut().enumerate() {
-            if !integrator.batches_lights() {
-                break;
-            }
-            if let Some(lane) = lane {
+        if integrator.batches_lights() {
+            for (k, lane) in lanes.iter_mut().enumerate() {
+                let Some(lane) = lane else { continue };
                 let query =
                     integrator.light_query(scene, &lane.path, hits[k].as_ref(), &mut lane.stream);
                 if let Some(q) = query {

@@ -415,10 +415,10 @@ impl Scene {
                 continue;
             };
             let prim = self.lights.prim(index);
+            chosen[k] = (prim, pmf);
             if let Emitter::Constant(light) = &self.emitters[prim.emitter as usize] {
                 uniform |= 1 << k;
                 (uniform_u[0][k], uniform_u[1][k]) = (u[k].x, u[k].y);
-                chosen[k] = (prim, pmf);
                 radiance[k] = light.radiance;
                 continue;
             }
@@ -435,13 +435,11 @@ impl Scene {
                         false
                     };
                     if pushed {
-                        chosen[k] = (prim, pmf);
                         radiance[k] = c;
                         continue;
                     }
                 }
             }
-            chosen[k] = (prim, pmf);
             scalar |= 1 << k;
         }
         if uniform != 0 {
