@@ -234,10 +234,109 @@ pub fn bilinear_to_square(p: Vec2, w: [f32; 4]) -> Vec2 {
     )
 }
 
+/// The bilinear and linear warps in sixteen lanes ([`radia_math::lanes`]): the scalar
+/// functions' operations in the same order, so each lane is bit for bit what they give for
+/// its values (for the finite non-negative ends they take).
+pub mod lanes {
+    use super::ONE_MINUS_EPSILON;
+    use radia_math::lanes::f32x16;
+
+    /// `f32::max` in lanes (a NaN operand gives the other one).
+    #[inline(always)]
+    fn max(a: f32x16, b: f32x16) -> f32x16 {
+        b.is_nan().select(a, a.simd_gt(b).select(a, b))
+    }
+
+    /// [`super::interval_to_linear`] in lanes.
+    #[inline(always)]
+    pub fn interval_to_linear(u: f32x16, a: f32x16, b: f32x16) -> f32x16 {
+        let zero = f32x16::ZERO;
+        let m = max(a, b);
+        let scaled = !(m.is_nan() | m.simd_le(zero));
+        let (a, b) = (a / m, b / m);
+        let at_zero = u.simd_le(zero) & a.simd_eq(zero);
+        let x = u * (a + b) / (a + ((f32x16::ONE - u) * a * a + u * b * b).sqrt());
+        // f32::clamp: NaN stays NaN.
+        let x = x.simd_lt(zero).select(zero, x);
+        let x = x
+            .simd_gt(f32x16::splat(ONE_MINUS_EPSILON))
+            .select(f32x16::splat(ONE_MINUS_EPSILON), x);
+        scaled.select(at_zero.select(zero, x), u)
+    }
+
+    /// [`super::square_to_bilinear`] in lanes: `u` and the result as (x, y), `w` the corners
+    /// in its order.
+    #[inline(always)]
+    pub fn square_to_bilinear(u: [f32x16; 2], w: [f32x16; 4]) -> [f32x16; 2] {
+        let m = max(max(max(w[0], w[1]), w[2]), w[3]);
+        let positive = m.simd_gt(f32x16::ZERO);
+        let w = w.map(|c| positive.select(c / m, c));
+        let y = interval_to_linear(u[1], w[0] + w[1], w[2] + w[3]);
+        let one_minus_y = f32x16::ONE - y;
+        let x = interval_to_linear(
+            u[0],
+            one_minus_y * w[0] + y * w[2],
+            one_minus_y * w[1] + y * w[3],
+        );
+        [x, y]
+    }
+
+    /// [`super::bilerp`] in lanes.
+    #[inline(always)]
+    pub fn bilerp(p: [f32x16; 2], w: [f32x16; 4]) -> f32x16 {
+        let (x, y) = (p[0], p[1]);
+        let one = f32x16::ONE;
+        (one - y) * ((one - x) * w[0] + x * w[1]) + y * ((one - x) * w[2] + x * w[3])
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::chi2::{chi2_test, chi2_test_2d, Chi2Config, Chi2Config2d, Chi2Result};
+
+    /// The lane warps are the scalar ones bit for bit: random corners (with zero corners,
+    /// zero edges and all-zero cells among them) and sample values (0 and values next to 1
+    /// among them).
+    #[test]
+    fn lane_warps_are_the_scalar_ones() {
+        use radia_math::lanes::{f32x16, WIDTH};
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg32::seed_from_u64(7);
+        let weight = |rng: &mut rand_pcg::Pcg32| match rng.random_range(0..6) {
+            0 => 0.0,
+            1 => rng.random::<f32>() * 1e-30,
+            2 => rng.random::<f32>() * 1e30,
+            _ => rng.random::<f32>(),
+        };
+        let value = |rng: &mut rand_pcg::Pcg32| match rng.random_range(0..8) {
+            0 => 0.0,
+            1 => ONE_MINUS_EPSILON,
+            _ => rng.random::<f32>(),
+        };
+        for _ in 0..20_000 / WIDTH {
+            let w: [[f32; WIDTH]; 4] =
+                std::array::from_fn(|_| std::array::from_fn(|_| weight(&mut rng)));
+            let u: [[f32; WIDTH]; 2] =
+                std::array::from_fn(|_| std::array::from_fn(|_| value(&mut rng)));
+            let lanes = |v: &[f32; WIDTH]| f32x16::new(*v);
+            let got =
+                lanes::square_to_bilinear([lanes(&u[0]), lanes(&u[1])], w.each_ref().map(lanes));
+            let pdf = lanes::bilerp(got, w.each_ref().map(lanes));
+            let (x, y, pdf) = (got[0].to_array(), got[1].to_array(), pdf.to_array());
+            for k in 0..WIDTH {
+                let corners = [w[0][k], w[1][k], w[2][k], w[3][k]];
+                let want = square_to_bilinear(Vec2::new(u[0][k], u[1][k]), corners);
+                assert_eq!(
+                    (x[k].to_bits(), y[k].to_bits()),
+                    (want.x.to_bits(), want.y.to_bits()),
+                    "u {:?}, corners {corners:?}",
+                    (u[0][k], u[1][k])
+                );
+                assert_eq!(pdf[k].to_bits(), bilerp(want, corners).to_bits());
+            }
+        }
+    }
 
     fn sphere_cfg() -> Chi2Config {
         Chi2Config {

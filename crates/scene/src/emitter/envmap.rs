@@ -58,6 +58,8 @@ use radia_sampling::{warp, DiscreteDistribution};
 
 use super::EmitterSample;
 
+mod lanes;
+
 #[derive(Clone, Debug)]
 pub struct Envmap {
     width: usize,
@@ -430,6 +432,72 @@ fn wrap_column(x0: f32, w: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The sixteen-lane sample is the scalar one bit for bit: maps small (padded) and
+    /// large, with black texels and black rows (cells with zero-weight corners, columns with
+    /// nothing to sample), rotated, with and without MIS compensation; sample values at 0 and
+    /// next to 1 among random ones, and lanes left out.
+    #[test]
+    fn lane_samples_are_the_scalar_ones() {
+        use radia_math::lanes::WIDTH;
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg32::seed_from_u64(3);
+        let rotation = Affine3A::from_axis_angle(Vec3::new(0.3, 1.0, -0.2).normalize(), 0.7);
+        for (w, h, compensate) in [(1, 1, false), (8, 5, true), (64, 33, false), (37, 20, true)] {
+            let pixels = (0..w * h)
+                .map(|k| match rng.random_range(0..5) {
+                    // A black band of rows.
+                    _ if (k / w) % 7 == 3 => Vec3::ZERO,
+                    0 => Vec3::ZERO,
+                    1 => Vec3::new(1000.0, 900.0, 800.0),
+                    _ => Vec3::new(rng.random(), rng.random(), rng.random()),
+                })
+                .collect();
+            let image = RgbImage {
+                width: w as u32,
+                height: h as u32,
+                pixels,
+            };
+            let e = Envmap::new(&image, 1.5, rotation, compensate);
+            let value = |rng: &mut rand_pcg::Pcg32| match rng.random_range(0..10) {
+                0 => 0.0,
+                1 => 1.0 - f32::EPSILON / 2.0,
+                _ => rng.random::<f32>(),
+            };
+            for _ in 0..2000 {
+                let u: [[f32; WIDTH]; 2] =
+                    std::array::from_fn(|_| std::array::from_fn(|_| value(&mut rng)));
+                let active = rng.random::<u32>() & 0xffff;
+                let mut out = [None; WIDTH];
+                e.sample_directions(active, &u, &mut out);
+                for k in 0..WIDTH {
+                    let want = (active & (1 << k) != 0)
+                        .then(|| e.sample_direction(Vec2::new(u[0][k], u[1][k])))
+                        .flatten();
+                    let bits = |s: &Option<EmitterSample>| {
+                        s.map(|s| {
+                            [
+                                s.d.x,
+                                s.d.y,
+                                s.d.z,
+                                s.pdf,
+                                s.radiance.x,
+                                s.radiance.y,
+                                s.radiance.z,
+                            ]
+                            .map(f32::to_bits)
+                        })
+                    };
+                    assert_eq!(
+                        bits(&out[k]),
+                        bits(&want),
+                        "{w}x{h}, u {:?}",
+                        (u[0][k], u[1][k])
+                    );
+                }
+            }
+        }
+    }
 
     /// `cell_row` is the binary search it replaces (the count of inner rows with
     /// cos θⱼ > cos θ), on every row border, one ulp either side, between rows, at the poles

@@ -37,7 +37,7 @@ pub const LIGHT_LANES: usize = 16;
 
 /// The indices of the set bits of `bits`, lowest first.
 #[inline(always)]
-fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
+pub(crate) fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
     std::iter::from_fn(move || {
         (bits != 0).then(|| {
             let k = bits.trailing_zeros() as usize;
@@ -360,32 +360,34 @@ impl Scene {
     }
 
     /// Whether [`Scene::sample_emitter_directions`] samples every light of the scene in
-    /// lanes: no lights at infinity, and area lights of constant radiance on flat meshes and
-    /// spheres only. Batching the light samples of a packet of paths pays only then
-    /// (measured at one thread against sampling each path's light in its own step: the
-    /// Cornell box 0.92x the time, Veach MIS 0.98x, 64 small lights 0.97x; a scene with an
-    /// environment or a smooth mesh light 1.04-1.06x, the batching's bookkeeping with
-    /// nothing or little to gain).
+    /// lanes: constant and image environments, and area lights of constant radiance on flat
+    /// meshes and spheres only. Batching the light samples of a packet of paths pays only
+    /// then (measured at one thread against sampling each path's light in its own step: the
+    /// Cornell box 0.92x the time, Veach MIS 0.98x, 64 small lights 0.97x, the sky and sun
+    /// of `scenes/envmap.xml` 0.89x; a smooth mesh light, or an environment map while it was
+    /// still sampled one lane at a time, 1.04-1.06x, the batching's bookkeeping with nothing
+    /// or little to gain).
     pub fn samples_lights_in_lanes(&self) -> bool {
-        self.environment.is_none()
-            && self.emitters.iter().all(|e| match e {
-                Emitter::Area(light) => {
-                    let shape = &self.shapes[light.shape as usize];
-                    matches!(light.radiance, Texture::Constant(_))
-                        // (A flat mesh: its first triangle stands for all.)
-                        && (shape.light_sphere().is_some() || shape.flat_light_triangle(0).is_some())
-                }
-                _ => false,
-            })
+        self.emitters.iter().all(|e| match e {
+            Emitter::Constant(_) | Emitter::Envmap(_) => true,
+            Emitter::Area(light) => {
+                let shape = &self.shapes[light.shape as usize];
+                // (A flat mesh: its first triangle stands for all.)
+                let flat_or_sphere =
+                    shape.light_sphere().is_some() || shape.flat_light_triangle(0).is_some();
+                matches!(light.radiance, Texture::Constant(_)) && flat_or_sphere
+            }
+            _ => false,
+        })
     }
 
     /// [`Scene::sample_emitter_direction`] for the lanes `active` of sixteen queries at
     /// once: `out[k]` becomes, bit for bit, what it returns for `ctx[k]`, `u_sel[k]` and
     /// `u[k]` (other lanes are left as they are). The light is chosen lane by lane; area
     /// lights of constant radiance on flat triangles that are small seen from their lane and
-    /// on spheres seen from outside, and constant environments, are then sampled in lanes
-    /// ([`crate::shape::LightTriangles`], [`crate::shape::LightSpheres`]), every other light
-    /// one lane at a time.
+    /// on spheres seen from outside, constant environments and environment maps are then
+    /// sampled in lanes ([`crate::shape::LightTriangles`], [`crate::shape::LightSpheres`],
+    /// [`crate::emitter::Envmap::sample_directions`]), every other light one lane at a time.
     pub fn sample_emitter_directions(
         &self,
         active: u32,
@@ -406,6 +408,8 @@ impl Scene {
         let mut radiance = [Spectrum::ZERO; LIGHT_LANES];
         // Lanes that chose a constant environment, and their sample values.
         let (mut uniform, mut uniform_u) = (0u32, [[0.0; LIGHT_LANES]; 2]);
+        // Lanes that chose the environment map (`envmap`, an emitter index), and theirs.
+        let (mut mapped, mut mapped_u, mut envmap) = (0u32, [[0.0; LIGHT_LANES]; 2], None);
         // Lanes whose light is sampled one lane at a time (in one place at the end, so that
         // the scalar sample is inlined once).
         let mut scalar = 0u32;
@@ -421,6 +425,14 @@ impl Scene {
                 (uniform_u[0][k], uniform_u[1][k]) = (u[k].x, u[k].y);
                 radiance[k] = light.radiance;
                 continue;
+            }
+            if let Emitter::Envmap(_) = &self.emitters[prim.emitter as usize] {
+                // (A scene has one environment: another map would go to the scalar code.)
+                if *envmap.get_or_insert(prim.emitter) == prim.emitter {
+                    mapped |= 1 << k;
+                    (mapped_u[0][k], mapped_u[1][k]) = (u[k].x, u[k].y);
+                    continue;
+                }
             }
             if let Emitter::Area(light) = &self.emitters[prim.emitter as usize] {
                 if let Texture::Constant(c) = light.radiance {
@@ -455,6 +467,14 @@ impl Scene {
                     radiance: radiance[k],
                     is_delta: false,
                 });
+            }
+        }
+        if let Some(Emitter::Envmap(map)) = envmap.map(|e| &self.emitters[e as usize]) {
+            map.sample_directions(mapped, &mapped_u, out);
+            for k in lanes_of(mapped) {
+                if let Some(es) = &mut out[k] {
+                    es.pdf *= chosen[k].1;
+                }
             }
         }
         for (lanes, samples) in [

@@ -1490,8 +1490,21 @@ fn lights_are_batched_only_where_every_one_is_sampled_in_lanes() {
     let bvh = LightSamplerKind::Bvh;
     assert!(scene(vec![flat(), ball()], vec![], bvh).samples_lights_in_lanes());
     assert!(scene(vec![flat()], vec![], bvh).samples_lights_in_lanes());
-    // An environment, a smooth-shaded mesh, a disk: some lanes would go one at a time.
-    assert!(!scene(vec![flat()], vec![env()], bvh).samples_lights_in_lanes());
+    // Constant and image environments are sampled in lanes too.
+    assert!(scene(vec![flat()], vec![env()], bvh).samples_lights_in_lanes());
+    let map = EmitterDesc::Envmap {
+        image: poles_image(),
+        scale: 1.0,
+        to_world: Affine3A::IDENTITY,
+        mis_compensation: false,
+    };
+    assert!(scene(vec![ball()], vec![map], bvh).samples_lights_in_lanes());
+    // A point light, a smooth-shaded mesh, a disk: some lanes would go one at a time.
+    let point = EmitterDesc::Point {
+        position: Vec3::new(0.0, 2.0, 0.0),
+        intensity: Vec3::ONE,
+    };
+    assert!(!scene(vec![flat()], vec![env(), point], bvh).samples_lights_in_lanes());
     assert!(
         !scene(vec![flat(), emitting(smooth_cap(), Vec3::ONE)], vec![], bvh)
             .samples_lights_in_lanes()

@@ -1,0 +1,146 @@
+//! [`Envmap::sample_direction`] for sixteen sample values at once, the light sample of the
+//! packet loop's next-event estimates in an environment-lit scene.
+//!
+//! One sample is two alias-table lookups (each a load that depends on the last and a
+//! division), the bilinear warp (two square roots, six divisions), a polar angle, a sine
+//! and cosine, a normalisation and an atan2, a chain a core runs one lane after another.
+//! Here the table lookups stay lane by lane (their loads cannot be shared) and everything
+//! after them runs over sixteen lanes ([`radia_math::lanes`], [`warp::lanes`]: the scalar
+//! operations in the same order), so every lane holds bit for bit what the scalar sample
+//! gives.
+
+use super::Envmap;
+use crate::emitter::EmitterSample;
+use crate::lights::lanes_of;
+use glam::Vec3;
+use radia_math::lanes::{self, f32x16, Mat3s, Vec3s, WIDTH};
+use radia_math::{Spectrum, INV_PI};
+use radia_sampling::warp;
+
+impl Envmap {
+    /// [`Envmap::sample_direction`] of `(u[0][k], u[1][k])` into `out[k]` for each lane k
+    /// set in `active`, bit for bit (the other lanes are left as they are).
+    pub fn sample_directions(
+        &self,
+        active: u32,
+        u: &[[f32; WIDTH]; 2],
+        out: &mut [Option<EmitterSample>; WIDTH],
+    ) {
+        let Some(rows) = self.rows.as_ref() else {
+            for k in lanes_of(active) {
+                out[k] = None;
+            }
+            return;
+        };
+        // ---- The cell of each lane: row, then column (alias tables, lane by lane) ----
+        let mut sampled = 0u32;
+        // The remapped sample values in the cell (s, t), its corner weights, its column
+        // (i + ½) and its rows' pole distances.
+        let mut st = [[0.0; WIDTH]; 2];
+        let mut corners = [[0.0; WIDTH]; 4];
+        let mut column = [0.0; WIDTH];
+        let mut pole = [[0.0; WIDTH]; 2];
+        let mut upper = 0u32;
+        let mut row_index = [0.0; WIDTH];
+        // The radiance at the cell's corners, `texels[corner][channel][lane]`.
+        let mut texels = [[[0.0; WIDTH]; 3]; 4];
+        for k in lanes_of(active) {
+            let row = rows.sample(u[0][k]);
+            let Some(col) = self.columns[row.index]
+                .as_ref()
+                .map(|columns| columns.sample(u[1][k]))
+            else {
+                out[k] = None;
+                continue;
+            };
+            sampled |= 1 << k;
+            let (i, j) = (col.index, row.index);
+            (st[0][k], st[1][k]) = (col.u_remapped, row.u_remapped);
+            let c = self.corners(i, j);
+            for (corner, value) in corners.iter_mut().zip(c) {
+                corner[k] = value;
+            }
+            column[k] = i as f32 + 0.5;
+            row_index[k] = j as f32;
+            [pole[0][k], pole[1][k]] = self.cell_pole_dist[j];
+            if Self::upper(j, self.height) {
+                upper |= 1 << k;
+            }
+            let w = self.width;
+            let i1 = if i + 1 == w { 0 } else { i + 1 };
+            let at = [j * w + i, j * w + i1, (j + 1) * w + i, (j + 1) * w + i1];
+            for (texel, index) in texels.iter_mut().zip(at) {
+                let c = self.texels[index];
+                (texel[0][k], texel[1][k], texel[2][k]) = (c.x, c.y, c.z);
+            }
+        }
+        if sampled == 0 {
+            return;
+        }
+
+        // ---- Everything after the tables, sixteen lanes at once ----
+        let v = |a: &[f32; WIDTH]| f32x16::new(*a);
+        let one = f32x16::ONE;
+        let corners = corners.each_ref().map(v);
+        let [s, t] = warp::lanes::square_to_bilinear(st.each_ref().map(v), corners);
+        // Envmap::cell_cos_sin.
+        let (p0, p1) = (v(&pole[0]), v(&pole[1]));
+        let p = p0 + (p1 - p0) * t;
+        let sin2 = p * (f32x16::splat(2.0) - p);
+        // safe_sqrt: f32::max(x, 0) is 0 for a NaN x.
+        let sin_theta = sin2.simd_gt(f32x16::ZERO).select(sin2, f32x16::ZERO).sqrt();
+        let cos_theta = lanes::mask(upper).select(one - p, p - one);
+        let (sin_phi, cos_phi) =
+            lanes::sin_cos_turns((v(&column) + s) / f32x16::splat(self.width as f32));
+        let local = Vec3s {
+            x: sin_phi * sin_theta,
+            y: cos_theta,
+            z: -cos_phi * sin_theta,
+        };
+        let to_world = Mat3s {
+            cols: [
+                Vec3s::splat(self.to_world.x_axis),
+                Vec3s::splat(self.to_world.y_axis),
+                Vec3s::splat(self.to_world.z_axis),
+            ],
+        };
+        let d = to_world.mul_vec3(local).normalize().to_rows();
+        let pdf = (warp::lanes::bilerp([s, t], corners) * f32x16::splat(self.inv_total)).to_array();
+        // Envmap::eval_cell.
+        let (angle, computed) = lanes::atan2(sin_theta, cos_theta);
+        let y = angle * f32x16::splat(INV_PI) * f32x16::splat((self.height - 1) as f32);
+        let fy = y - v(&row_index);
+        let fy = fy.simd_lt(f32x16::ZERO).select(f32x16::ZERO, fy);
+        let fy = fy.simd_gt(one).select(one, fy);
+        let lerp = |c: usize| {
+            let at = |corner: usize| v(&texels[corner][c]);
+            let top = at(0) * (one - s) + at(1) * s;
+            let bottom = at(2) * (one - s) + at(3) * s;
+            (top * (one - fy) + bottom * fy).to_array()
+        };
+        let radiance = [lerp(0), lerp(1), lerp(2)];
+        let computed = computed.to_bitmask() as u32;
+
+        for k in lanes_of(sampled) {
+            if computed & (1 << k) == 0 {
+                // An angle the scalar atan2 leaves to the C library (a NaN direction).
+                out[k] = self.sample_direction(glam::Vec2::new(u[0][k], u[1][k]));
+                continue;
+            }
+            out[k] = if pdf[k].is_nan() || pdf[k] <= 0.0 {
+                None
+            } else {
+                Some(EmitterSample {
+                    d: Vec3::new(d[0][k], d[1][k], d[2][k]),
+                    dist: f32::INFINITY,
+                    p: Vec3::ZERO,
+                    n: Vec3::ZERO,
+                    p_error: Vec3::ZERO,
+                    pdf: pdf[k],
+                    radiance: Spectrum::new(radiance[0][k], radiance[1][k], radiance[2][k]),
+                    is_delta: false,
+                })
+            };
+        }
+    }
+}
