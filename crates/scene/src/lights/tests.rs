@@ -1387,8 +1387,9 @@ fn sampling_weight_multiplies_a_bvh_leafs_odds() {
 /// lanes) gives, bit for bit, what `sample_emitter_direction` gives each query: from points
 /// near a light triangle (solid-angle sampling, left to the scalar code), far from it (area
 /// sampling in lanes), behind it (no sample), from outside spheres (cone sampling in lanes)
-/// and inside them (the scalar code), among lights of other kinds (disk, environment: the
-/// scalar code), and with lanes left out of the batch.
+/// and inside them (the scalar code), among lights of other kinds (disk: the scalar code;
+/// a constant environment or an environment map: in lanes), and with lanes left out of the
+/// batch.
 #[test]
 fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
     use crate::lights::LIGHT_LANES;
@@ -1407,9 +1408,15 @@ fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
             Vec3::splat(3.0),
         ),
     ];
-    let env = vec![EmitterDesc::Constant {
+    let constant = EmitterDesc::Constant {
         radiance: Vec3::splat(0.1),
-    }];
+    };
+    let map = EmitterDesc::Envmap {
+        image: poles_image(),
+        scale: 0.5,
+        to_world: Affine3A::from_rotation_x(0.4),
+        mis_compensation: false,
+    };
     let bits = |es: &Option<EmitterSample>| {
         es.map(|e| {
             let v = |v: Vec3| v.to_array().map(f32::to_bits);
@@ -1427,12 +1434,8 @@ fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
     };
     let (mut in_lanes, mut total) = (0, 0);
     for kind in [LightSamplerKind::Bvh, LightSamplerKind::Uniform] {
-        for with_env in [false, true] {
-            let s = scene(
-                shapes.clone(),
-                if with_env { env.clone() } else { vec![] },
-                kind,
-            );
+        for env in [vec![], vec![constant.clone()], vec![map.clone()]] {
+            let s = scene(shapes.clone(), env, kind);
             for _ in 0..400 {
                 let ctx: [LightContext; LIGHT_LANES] = std::array::from_fn(|_| {
                     // Distances from 10⁻³ to 10² of the rectangle, on both sides.
@@ -1490,8 +1493,9 @@ fn lights_are_batched_only_where_every_one_is_sampled_in_lanes() {
     let bvh = LightSamplerKind::Bvh;
     assert!(scene(vec![flat(), ball()], vec![], bvh).samples_lights_in_lanes());
     assert!(scene(vec![flat()], vec![], bvh).samples_lights_in_lanes());
-    // Constant and image environments are sampled in lanes too.
-    assert!(scene(vec![flat()], vec![env()], bvh).samples_lights_in_lanes());
+    // Environment maps are sampled in lanes too; a constant environment is too, but
+    // batched beside the area lights it costs more than it saves.
+    assert!(!scene(vec![flat()], vec![env()], bvh).samples_lights_in_lanes());
     let map = EmitterDesc::Envmap {
         image: poles_image(),
         scale: 1.0,
@@ -1504,7 +1508,7 @@ fn lights_are_batched_only_where_every_one_is_sampled_in_lanes() {
         position: Vec3::new(0.0, 2.0, 0.0),
         intensity: Vec3::ONE,
     };
-    assert!(!scene(vec![flat()], vec![env(), point], bvh).samples_lights_in_lanes());
+    assert!(!scene(vec![flat()], vec![point], bvh).samples_lights_in_lanes());
     assert!(
         !scene(vec![flat(), emitting(smooth_cap(), Vec3::ONE)], vec![], bvh)
             .samples_lights_in_lanes()
