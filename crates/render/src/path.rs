@@ -114,6 +114,7 @@ impl PathIntegrator {
                 &mut path,
                 hit.as_ref(),
                 None,
+                None,
                 sampler,
                 stats,
                 &mut shadow,
@@ -220,7 +221,9 @@ impl PathIntegrator {
     ///
     /// `light` is the estimate's light sample when it was made already, from the values of
     /// [`PathIntegrator::light_query`] (`Some(None)`: the light sample failed); `None` to
-    /// make it here.
+    /// make it here. `escape` is the environment's radiance and density along `path.ray`
+    /// when they were looked up already (the packet loop does so for the rays that escape),
+    /// `None` to look them up here.
     ///
     /// (The estimate is written in place rather than returned: the packet loop copied a
     /// returned one into its lane through the stack, and that copy stalled on store
@@ -232,6 +235,7 @@ impl PathIntegrator {
         path: &mut PathState,
         hit: Option<&SurfaceInteraction>,
         light: Option<&Option<EmitterSample>>,
+        escape: Option<&(Spectrum, f32)>,
         sampler: &mut SampleStream<'_, S>,
         stats: &mut PathStats,
         shadow: &mut Option<PendingShadow>,
@@ -251,7 +255,10 @@ impl PathIntegrator {
             if let Some(env) = scene.environment {
                 if !(self.hide_emitters && path.primary) {
                     let emitter = &scene.emitters[env as usize];
-                    let (le, pdf_dir) = emitter.eval_environment_pdf(path.ray.d);
+                    let (le, pdf_dir) = match escape {
+                        Some(&found) => found,
+                        None => emitter.eval_environment_pdf(path.ray.d),
+                    };
                     let w = self.mis_emitter_hit(&path.prev, |ctx| {
                         scene.pdf_environment(ctx, env, pdf_dir)
                     });

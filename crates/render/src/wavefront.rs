@@ -12,6 +12,7 @@
 use crate::integrator::{CameraSample, Traced};
 use crate::path::{PathIntegrator, PathState, PathStats, PendingShadow};
 use glam::{Vec2, Vec3};
+use radia_math::Spectrum;
 use radia_sampling::{SampleStream, Sampler};
 use radia_scene::{
     EmitterSample, LightContext, RayPacket, Scene, ShadowLanes, SurfaceInteraction, PACKET_LANES,
@@ -53,6 +54,9 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
     }; LANES];
     let (mut light_u_sel, mut light_u) = ([0.0; LANES], [Vec2::ZERO; LANES]);
     let mut light_samples: [Option<EmitterSample>; LANES] = [None; LANES];
+    // The environment map's radiance and density along the escaped rays, by lane.
+    let environment_map = scene.environment_map();
+    let mut escapes = [(Spectrum::ZERO, 0.0); LANES];
     loop {
         // ---- Free lanes take the next camera samples ----
         // Their rays are made afterwards, sixteen at once (`Camera::generate_rays`): a camera
@@ -137,6 +141,21 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
             );
         }
 
+        // ---- The environment map along the rays that escaped, sixteen at once ----
+        let mut escaped = 0u32;
+        if let Some(map) = environment_map {
+            let mut d = [[0.0; LANES]; 3];
+            for (k, lane) in lanes.iter().enumerate() {
+                if let (Some(lane), None) = (lane, &hits[k]) {
+                    escaped |= 1 << k;
+                    (d[0][k], d[1][k], d[2][k]) = lane.path.ray.d.into();
+                }
+            }
+            if escaped != 0 {
+                map.eval_pdfs(escaped, &d, &mut escapes);
+            }
+        }
+
         // ---- Each path's bounce: emission, NEE, BSDF sample ----
         let mut goes_on = [false; LANES];
         for (k, lane) in lanes.iter_mut().enumerate() {
@@ -149,6 +168,7 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
                     &mut lane.path,
                     hits[k].as_ref(),
                     (asks & (1 << k) != 0).then_some(&light_samples[k]),
+                    (escaped & (1 << k) != 0).then_some(&escapes[k]),
                     &mut lane.stream,
                     stats,
                     &mut lane.shadow,

@@ -308,6 +308,16 @@ impl Scene {
         }
     }
 
+    /// The environment when it is an image (`envmap`): the packet loop looks up its lanes'
+    /// escaped rays in it together ([`emitter::Envmap::eval_pdfs`]).
+    #[inline]
+    pub fn environment_map(&self) -> Option<&emitter::Envmap> {
+        match &self.emitters[self.environment? as usize] {
+            Emitter::Envmap(map) => Some(map),
+            _ => None,
+        }
+    }
+
     /// The area emitter of the surface at `si`, if it glows.
     #[inline]
     pub fn surface_emitter(&self, si: &SurfaceInteraction) -> Option<(u32, &Emitter)> {

@@ -499,6 +499,68 @@ mod tests {
         }
     }
 
+    /// The sixteen-lane radiance and density of escaped directions are the scalar ones bit
+    /// for bit: random directions, the poles, the seam (−z), axes, a zero and a non-unit
+    /// direction, on the maps of `lane_samples_are_the_scalar_ones` and a black one.
+    #[test]
+    fn lane_lookups_are_the_scalar_ones() {
+        use radia_math::lanes::WIDTH;
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg32::seed_from_u64(5);
+        let rotation = Affine3A::from_axis_angle(Vec3::new(0.3, 1.0, -0.2).normalize(), 0.7);
+        for (w, h, compensate, black) in [
+            (1, 1, false, false),
+            (8, 5, true, false),
+            (64, 33, false, false),
+            (37, 20, true, false),
+            (4, 4, false, true),
+        ] {
+            let pixels = (0..w * h)
+                .map(|k| match rng.random_range(0..5) {
+                    _ if black || (k / w) % 7 == 3 => Vec3::ZERO,
+                    0 => Vec3::ZERO,
+                    1 => Vec3::new(1000.0, 900.0, 800.0),
+                    _ => Vec3::new(rng.random(), rng.random(), rng.random()),
+                })
+                .collect();
+            let image = RgbImage {
+                width: w as u32,
+                height: h as u32,
+                pixels,
+            };
+            for to_world in [Affine3A::IDENTITY, rotation] {
+                let e = Envmap::new(&image, 1.5, to_world, compensate);
+                let special = [Vec3::Y, -Vec3::Y, -Vec3::Z, Vec3::Z, Vec3::X, Vec3::ZERO];
+                for _ in 0..1000 {
+                    let dirs: [Vec3; WIDTH] =
+                        std::array::from_fn(|_| match rng.random_range(0..8) {
+                            0 => special[rng.random_range(0..special.len())],
+                            1 => Vec3::new(rng.random(), rng.random(), rng.random()) * 3.0,
+                            _ => warp::square_to_uniform_sphere(Vec2::new(
+                                rng.random(),
+                                rng.random(),
+                            )),
+                        });
+                    let d: [[f32; WIDTH]; 3] =
+                        std::array::from_fn(|a| std::array::from_fn(|k| dirs[k][a]));
+                    let active = rng.random::<u32>() & 0xffff;
+                    let stale = (Spectrum::splat(7.0), 3.0);
+                    let mut out = [stale; WIDTH];
+                    e.eval_pdfs(active, &d, &mut out);
+                    for k in 0..WIDTH {
+                        let want = if active & (1 << k) != 0 {
+                            e.eval_pdf(dirs[k])
+                        } else {
+                            stale
+                        };
+                        let bits = |(l, p): (Spectrum, f32)| [l.x, l.y, l.z, p].map(f32::to_bits);
+                        assert_eq!(bits(out[k]), bits(want), "{w}x{h}, d {:?}", dirs[k]);
+                    }
+                }
+            }
+        }
+    }
+
     /// `cell_row` is the binary search it replaces (the count of inner rows with
     /// cos θⱼ > cos θ), on every row border, one ulp either side, between rows, at the poles
     /// and for NaN, for maps of odd and even height, small and large.

@@ -14,7 +14,7 @@ use crate::emitter::EmitterSample;
 use crate::lights::lanes_of;
 use glam::Vec3;
 use radia_math::lanes::{self, f32x16, Mat3s, Vec3s, WIDTH};
-use radia_math::{Spectrum, INV_PI};
+use radia_math::{Spectrum, INV_PI, INV_TWO_PI};
 use radia_sampling::warp;
 
 impl Envmap {
@@ -140,6 +140,109 @@ impl Envmap {
                     radiance: Spectrum::new(radiance[0][k], radiance[1][k], radiance[2][k]),
                     is_delta: false,
                 })
+            };
+        }
+    }
+}
+
+impl Envmap {
+    /// [`Envmap::eval_pdf`] of the world directions `d[axis][k]` into `out[k]` for each lane
+    /// k set in `active`, bit for bit (the other lanes are left as they are): the radiance of
+    /// the rays that escape a packet of paths, and its density for their MIS weights.
+    pub fn eval_pdfs(
+        &self,
+        active: u32,
+        d: &[[f32; WIDTH]; 3],
+        out: &mut [(Spectrum, f32); WIDTH],
+    ) {
+        // ---- Where each direction falls in the map (Envmap::lookup), in lanes ----
+        let to_local = Mat3s {
+            cols: [
+                Vec3s::splat(self.to_local.x_axis),
+                Vec3s::splat(self.to_local.y_axis),
+                Vec3s::splat(self.to_local.z_axis),
+            ],
+        };
+        let local = to_local.mul_vec3(Vec3s::from_rows(d)).normalize();
+        let (angle, azimuth_computed) = lanes::atan2(local.x, -local.z);
+        let u = angle * f32x16::splat(INV_TWO_PI);
+        let u = u - u.floor();
+        let x = u * f32x16::splat(self.width as f32) - f32x16::splat(0.5);
+        let x0 = x.floor();
+        let fx = x - x0;
+        // safe_acos: f32::clamp to [−1, 1] (NaN stays NaN), then acos as trig::acos.
+        let one = f32x16::ONE;
+        let c = local.y.simd_lt(-one).select(-one, local.y);
+        let c = c.simd_gt(one).select(one, c);
+        let (polar, polar_computed) = lanes::atan2(((one - c) * (one + c)).sqrt(), c);
+        let y = polar * f32x16::splat(INV_PI) * f32x16::splat((self.height - 1) as f32);
+        let computed = (azimuth_computed & polar_computed).to_bitmask() as u32;
+        let (x0, y_rows, local_rows) = (x0.to_array(), y.to_array(), local.to_rows());
+
+        // ---- The texels and the sampling cell, lane by lane (loads and short searches) ----
+        let (w, h) = (self.width, self.height);
+        let mut texels = [[[0.0; WIDTH]; 3]; 4];
+        let mut texel_row = [0.0; WIDTH];
+        let mut corners = [[0.0; WIDTH]; 4];
+        let mut t = [0.0; WIDTH];
+        for k in lanes_of(active & computed) {
+            let i0 = super::wrap_column(x0[k], w);
+            let i1 = if i0 + 1 == w { 0 } else { i0 + 1 };
+            // Lookup::radiance's row.
+            let j0 = (y_rows[k].floor().max(0.0) as usize).min(h - 2);
+            texel_row[k] = j0 as f32;
+            let at = [
+                j0 * w + i0,
+                j0 * w + i1,
+                (j0 + 1) * w + i0,
+                (j0 + 1) * w + i1,
+            ];
+            for (texel, index) in texels.iter_mut().zip(at) {
+                let c = self.texels[index];
+                (texel[0][k], texel[1][k], texel[2][k]) = (c.x, c.y, c.z);
+            }
+            // Lookup::pdf's cell.
+            if self.rows.is_some() {
+                let dk = Vec3::new(local_rows[0][k], local_rows[1][k], local_rows[2][k]);
+                let j = self.cell_row(dk.y, y_rows[k]);
+                t[k] = self.cell_t(j, dk);
+                for (corner, value) in corners.iter_mut().zip(self.corners(i0, j)) {
+                    corner[k] = value;
+                }
+            }
+        }
+
+        // ---- The bilinear radiance and density, in lanes ----
+        let v = |a: &[f32; WIDTH]| f32x16::new(*a);
+        let zero = f32x16::ZERO;
+        let clamp01 = |a: f32x16| {
+            let a = a.simd_lt(zero).select(zero, a);
+            a.simd_gt(one).select(one, a)
+        };
+        let fy = clamp01(y - v(&texel_row));
+        let lerp = |c: usize| {
+            let at = |corner: usize| v(&texels[corner][c]);
+            let top = at(0) * (one - fx) + at(1) * fx;
+            let bottom = at(2) * (one - fx) + at(3) * fx;
+            (top * (one - fy) + bottom * fy).to_array()
+        };
+        let radiance = [lerp(0), lerp(1), lerp(2)];
+        let pdf = if self.rows.is_none() {
+            [0.0; WIDTH]
+        } else {
+            let st = [clamp01(fx), v(&t)];
+            (warp::lanes::bilerp(st, corners.each_ref().map(v)) * f32x16::splat(self.inv_total))
+                .to_array()
+        };
+        for k in lanes_of(active) {
+            out[k] = if computed & (1 << k) == 0 {
+                // An angle the scalar atan2 leaves to the C library (a NaN direction).
+                self.eval_pdf(Vec3::new(d[0][k], d[1][k], d[2][k]))
+            } else {
+                (
+                    Spectrum::new(radiance[0][k], radiance[1][k], radiance[2][k]),
+                    pdf[k],
+                )
             };
         }
     }
