@@ -433,32 +433,52 @@ fn wrap_column(x0: f32, w: usize) -> usize {
 mod tests {
     use super::*;
 
-    /// The sixteen-lane sample is the scalar one bit for bit: maps small (padded) and
-    /// large, with black texels and black rows (cells with zero-weight corners, columns with
-    /// nothing to sample), rotated, with and without MIS compensation; sample values at 0 and
-    /// next to 1 among random ones, and lanes left out.
+    /// Maps for the lane tests, with whether to compensate for MIS: small (padded) and
+    /// large, with black texels and black bands of rows (cells with zero-weight corners,
+    /// columns with nothing to sample), a sun-like bright texel, and one all black.
+    fn lane_test_maps(rng: &mut rand_pcg::Pcg32) -> Vec<(RgbImage, bool)> {
+        use rand::Rng;
+        let sizes = [
+            (1, 1, false, false),
+            (8, 5, true, false),
+            (64, 33, false, false),
+            (37, 20, true, false),
+            (4, 4, false, true),
+        ];
+        sizes
+            .into_iter()
+            .map(|(w, h, compensate, black)| {
+                let pixels = (0..w * h)
+                    .map(|k| match rng.random_range(0..5) {
+                        _ if black || (k / w) % 7 == 3 => Vec3::ZERO,
+                        0 => Vec3::ZERO,
+                        1 => Vec3::new(1000.0, 900.0, 800.0),
+                        _ => Vec3::new(rng.random(), rng.random(), rng.random()),
+                    })
+                    .collect();
+                let image = RgbImage {
+                    width: w as u32,
+                    height: h as u32,
+                    pixels,
+                };
+                (image, compensate)
+            })
+            .collect()
+    }
+
+    fn lane_test_rotation() -> Affine3A {
+        Affine3A::from_axis_angle(Vec3::new(0.3, 1.0, -0.2).normalize(), 0.7)
+    }
+
+    /// The sixteen-lane sample is the scalar one bit for bit on [`lane_test_maps`], rotated;
+    /// sample values at 0 and next to 1 among random ones, and lanes left out.
     #[test]
     fn lane_samples_are_the_scalar_ones() {
         use radia_math::lanes::WIDTH;
         use rand::{Rng, SeedableRng};
         let mut rng = rand_pcg::Pcg32::seed_from_u64(3);
-        let rotation = Affine3A::from_axis_angle(Vec3::new(0.3, 1.0, -0.2).normalize(), 0.7);
-        for (w, h, compensate) in [(1, 1, false), (8, 5, true), (64, 33, false), (37, 20, true)] {
-            let pixels = (0..w * h)
-                .map(|k| match rng.random_range(0..5) {
-                    // A black band of rows.
-                    _ if (k / w) % 7 == 3 => Vec3::ZERO,
-                    0 => Vec3::ZERO,
-                    1 => Vec3::new(1000.0, 900.0, 800.0),
-                    _ => Vec3::new(rng.random(), rng.random(), rng.random()),
-                })
-                .collect();
-            let image = RgbImage {
-                width: w as u32,
-                height: h as u32,
-                pixels,
-            };
-            let e = Envmap::new(&image, 1.5, rotation, compensate);
+        for (image, compensate) in lane_test_maps(&mut rng) {
+            let e = Envmap::new(&image, 1.5, lane_test_rotation(), compensate);
             let value = |rng: &mut rand_pcg::Pcg32| match rng.random_range(0..10) {
                 0 => 0.0,
                 1 => 1.0 - f32::EPSILON / 2.0,
@@ -488,6 +508,7 @@ mod tests {
                             .map(f32::to_bits)
                         })
                     };
+                    let (w, h) = (image.width, image.height);
                     assert_eq!(
                         bits(&out[k]),
                         bits(&want),
@@ -501,34 +522,14 @@ mod tests {
 
     /// The sixteen-lane radiance and density of escaped directions are the scalar ones bit
     /// for bit: random directions, the poles, the seam (−z), axes, a zero and a non-unit
-    /// direction, on the maps of `lane_samples_are_the_scalar_ones` and a black one.
+    /// direction, on [`lane_test_maps`], turned and not.
     #[test]
     fn lane_lookups_are_the_scalar_ones() {
         use radia_math::lanes::WIDTH;
         use rand::{Rng, SeedableRng};
         let mut rng = rand_pcg::Pcg32::seed_from_u64(5);
-        let rotation = Affine3A::from_axis_angle(Vec3::new(0.3, 1.0, -0.2).normalize(), 0.7);
-        for (w, h, compensate, black) in [
-            (1, 1, false, false),
-            (8, 5, true, false),
-            (64, 33, false, false),
-            (37, 20, true, false),
-            (4, 4, false, true),
-        ] {
-            let pixels = (0..w * h)
-                .map(|k| match rng.random_range(0..5) {
-                    _ if black || (k / w) % 7 == 3 => Vec3::ZERO,
-                    0 => Vec3::ZERO,
-                    1 => Vec3::new(1000.0, 900.0, 800.0),
-                    _ => Vec3::new(rng.random(), rng.random(), rng.random()),
-                })
-                .collect();
-            let image = RgbImage {
-                width: w as u32,
-                height: h as u32,
-                pixels,
-            };
-            for to_world in [Affine3A::IDENTITY, rotation] {
+        for (image, compensate) in lane_test_maps(&mut rng) {
+            for to_world in [Affine3A::IDENTITY, lane_test_rotation()] {
                 let e = Envmap::new(&image, 1.5, to_world, compensate);
                 let special = [Vec3::Y, -Vec3::Y, -Vec3::Z, Vec3::Z, Vec3::X, Vec3::ZERO];
                 for _ in 0..1000 {
@@ -554,7 +555,14 @@ mod tests {
                             stale
                         };
                         let bits = |(l, p): (Spectrum, f32)| [l.x, l.y, l.z, p].map(f32::to_bits);
-                        assert_eq!(bits(out[k]), bits(want), "{w}x{h}, d {:?}", dirs[k]);
+                        assert_eq!(
+                            bits(out[k]),
+                            bits(want),
+                            "{}x{}, d {:?}",
+                            image.width,
+                            image.height,
+                            dirs[k]
+                        );
                     }
                 }
             }

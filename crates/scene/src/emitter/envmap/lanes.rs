@@ -109,17 +109,8 @@ impl Envmap {
         // Envmap::eval_cell.
         let (angle, computed) = lanes::atan2(sin_theta, cos_theta);
         let y = angle * f32x16::splat(INV_PI) * f32x16::splat((self.height - 1) as f32);
-        let fy = y - v(&row_index);
-        let fy = fy.simd_lt(f32x16::ZERO).select(f32x16::ZERO, fy);
-        let fy = fy.simd_gt(one).select(one, fy);
-        let lerp = |c: usize| {
-            let at = |corner: usize| v(&texels[corner][c]);
-            let top = at(0) * (one - s) + at(1) * s;
-            let bottom = at(2) * (one - s) + at(3) * s;
-            (top * (one - fy) + bottom * fy).to_array()
-        };
-        let radiance = [lerp(0), lerp(1), lerp(2)];
-        let computed = computed.to_bitmask() as u32;
+        let radiance = lerp_texels(&texels, s, clamp01(y - v(&row_index)));
+        let computed = computed.to_bitmask();
 
         for k in lanes_of(sampled) {
             if computed & (1 << k) == 0 {
@@ -176,7 +167,7 @@ impl Envmap {
         let c = c.simd_gt(one).select(one, c);
         let (polar, polar_computed) = lanes::atan2(((one - c) * (one + c)).sqrt(), c);
         let y = polar * f32x16::splat(INV_PI) * f32x16::splat((self.height - 1) as f32);
-        let computed = (azimuth_computed & polar_computed).to_bitmask() as u32;
+        let computed = (azimuth_computed & polar_computed).to_bitmask();
         let (x0, y_rows, local_rows) = (x0.to_array(), y.to_array(), local.to_rows());
 
         // ---- The texels and the sampling cell, lane by lane (loads and short searches) ----
@@ -214,19 +205,7 @@ impl Envmap {
 
         // ---- The bilinear radiance and density, in lanes ----
         let v = |a: &[f32; WIDTH]| f32x16::new(*a);
-        let zero = f32x16::ZERO;
-        let clamp01 = |a: f32x16| {
-            let a = a.simd_lt(zero).select(zero, a);
-            a.simd_gt(one).select(one, a)
-        };
-        let fy = clamp01(y - v(&texel_row));
-        let lerp = |c: usize| {
-            let at = |corner: usize| v(&texels[corner][c]);
-            let top = at(0) * (one - fx) + at(1) * fx;
-            let bottom = at(2) * (one - fx) + at(3) * fx;
-            (top * (one - fy) + bottom * fy).to_array()
-        };
-        let radiance = [lerp(0), lerp(1), lerp(2)];
+        let radiance = lerp_texels(&texels, fx, clamp01(y - v(&texel_row)));
         let pdf = if self.rows.is_none() {
             [0.0; WIDTH]
         } else {
@@ -246,4 +225,26 @@ impl Envmap {
             };
         }
     }
+}
+
+/// `f32::clamp(a, 0, 1)` in lanes (NaN stays NaN).
+#[inline(always)]
+fn clamp01(a: f32x16) -> f32x16 {
+    let (zero, one) = (f32x16::ZERO, f32x16::ONE);
+    let a = a.simd_lt(zero).select(zero, a);
+    a.simd_gt(one).select(one, a)
+}
+
+/// [`Envmap::lerp_texels`] in lanes: the four texels `texels[corner][channel][lane]` in the
+/// order (i0, j), (i1, j), (i0, j + 1), (i1, j + 1), at fractions `fx` across and `fy`
+/// down; the radiance by channel.
+#[inline(always)]
+fn lerp_texels(texels: &[[[f32; WIDTH]; 3]; 4], fx: f32x16, fy: f32x16) -> [[f32; WIDTH]; 3] {
+    let one = f32x16::ONE;
+    std::array::from_fn(|c| {
+        let at = |corner: usize| f32x16::new(texels[corner][c]);
+        let top = at(0) * (one - fx) + at(1) * fx;
+        let bottom = at(2) * (one - fx) + at(3) * fx;
+        (top * (one - fy) + bottom * fy).to_array()
+    })
 }
