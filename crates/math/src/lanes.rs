@@ -132,6 +132,14 @@ pub struct Mat3s {
 }
 
 impl Mat3s {
+    /// The same matrix in every lane.
+    #[inline(always)]
+    pub fn splat(m: glam::Mat3) -> Self {
+        Self {
+            cols: [m.x_axis, m.y_axis, m.z_axis].map(Vec3s::splat),
+        }
+    }
+
     /// glam's `Mat3A::mul_vec3`: (c₀·x + c₁·y) + c₂·z per component.
     #[inline(always)]
     pub fn mul_vec3(&self, v: Vec3s) -> Vec3s {

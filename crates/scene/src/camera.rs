@@ -97,10 +97,7 @@ impl Camera {
         let inv_z = p.length_squared().sqrt();
         let near_t = splat(self.near_clip) * inv_z;
         let far_t = splat(self.far_clip) * inv_z;
-        let m = self.to_world.matrix3;
-        let to_world = Mat3s {
-            cols: [m.x_axis, m.y_axis, m.z_axis].map(|c| Vec3s::splat(c.into())),
-        };
+        let to_world = Mat3s::splat(self.to_world.matrix3.into());
         let d = to_world.mul_vec3(p).normalize();
         let o = Vec3s::splat(self.origin) + d * near_t;
         CameraRays {

@@ -244,6 +244,20 @@ impl Envmap {
         top * (1.0 - fy) + bottom * fy
     }
 
+    /// The radiance of texels (i, j), (i + 1, j), (i, j + 1) and (i + 1, j + 1), columns
+    /// wrapped: what [`Envmap::lerp_texels`] interpolates (the lane code gathers them).
+    #[inline(always)]
+    fn cell_texels(&self, i: usize, j: usize) -> [Spectrum; 4] {
+        let (t, w) = (&self.texels, self.width);
+        let i1 = if i + 1 == w { 0 } else { i + 1 };
+        [
+            t[j * w + i],
+            t[j * w + i1],
+            t[(j + 1) * w + i],
+            t[(j + 1) * w + i1],
+        ]
+    }
+
     /// Whether texel row j lies above the horizon (θⱼ < π/2; the cells from row j down
     /// to row j + 1 interpolate 1 − cos θ then, otherwise 1 + cos θ).
     #[inline]

@@ -66,11 +66,7 @@ impl Envmap {
             if Self::upper(j, self.height) {
                 upper |= 1 << k;
             }
-            let w = self.width;
-            let i1 = if i + 1 == w { 0 } else { i + 1 };
-            let at = [j * w + i, j * w + i1, (j + 1) * w + i, (j + 1) * w + i1];
-            for (texel, index) in texels.iter_mut().zip(at) {
-                let c = self.texels[index];
+            for (texel, c) in texels.iter_mut().zip(self.cell_texels(i, j)) {
                 (texel[0][k], texel[1][k], texel[2][k]) = (c.x, c.y, c.z);
             }
         }
@@ -97,19 +93,13 @@ impl Envmap {
             y: cos_theta,
             z: -cos_phi * sin_theta,
         };
-        let to_world = Mat3s {
-            cols: [
-                Vec3s::splat(self.to_world.x_axis),
-                Vec3s::splat(self.to_world.y_axis),
-                Vec3s::splat(self.to_world.z_axis),
-            ],
-        };
+        let to_world = Mat3s::splat(self.to_world);
         let d = to_world.mul_vec3(local).normalize().to_rows();
         let pdf = (warp::lanes::bilerp([s, t], corners) * f32x16::splat(self.inv_total)).to_array();
         // Envmap::eval_cell.
         let (angle, computed) = lanes::atan2(sin_theta, cos_theta);
         let y = angle * f32x16::splat(INV_PI) * f32x16::splat((self.height - 1) as f32);
-        let radiance = lerp_texels(&texels, s, clamp01(y - v(&row_index)));
+        let radiance = lerp_texels(&texels, s, clamp(y - v(&row_index), 0.0, 1.0));
         let computed = computed.to_bitmask();
 
         for k in lanes_of(sampled) {
@@ -134,9 +124,7 @@ impl Envmap {
             };
         }
     }
-}
 
-impl Envmap {
     /// [`Envmap::eval_pdf`] of the world directions `d[axis][k]` into `out[k]` for each lane
     /// k set in `active`, bit for bit (the other lanes are left as they are): the radiance of
     /// the rays that escape a packet of paths, and its density for their MIS weights.
@@ -147,13 +135,7 @@ impl Envmap {
         out: &mut [(Spectrum, f32); WIDTH],
     ) {
         // ---- Where each direction falls in the map (Envmap::lookup), in lanes ----
-        let to_local = Mat3s {
-            cols: [
-                Vec3s::splat(self.to_local.x_axis),
-                Vec3s::splat(self.to_local.y_axis),
-                Vec3s::splat(self.to_local.z_axis),
-            ],
-        };
+        let to_local = Mat3s::splat(self.to_local);
         let local = to_local.mul_vec3(Vec3s::from_rows(d)).normalize();
         let (angle, azimuth_computed) = lanes::atan2(local.x, -local.z);
         let u = angle * f32x16::splat(INV_TWO_PI);
@@ -163,8 +145,7 @@ impl Envmap {
         let fx = x - x0;
         // safe_acos: f32::clamp to [−1, 1] (NaN stays NaN), then acos as trig::acos.
         let one = f32x16::ONE;
-        let c = local.y.simd_lt(-one).select(-one, local.y);
-        let c = c.simd_gt(one).select(one, c);
+        let c = clamp(local.y, -1.0, 1.0);
         let (polar, polar_computed) = lanes::atan2(((one - c) * (one + c)).sqrt(), c);
         let y = polar * f32x16::splat(INV_PI) * f32x16::splat((self.height - 1) as f32);
         let computed = (azimuth_computed & polar_computed).to_bitmask();
@@ -172,28 +153,21 @@ impl Envmap {
 
         // ---- The texels and the sampling cell, lane by lane (loads and short searches) ----
         let (w, h) = (self.width, self.height);
+        let has_density = self.rows.is_some();
         let mut texels = [[[0.0; WIDTH]; 3]; 4];
         let mut texel_row = [0.0; WIDTH];
         let mut corners = [[0.0; WIDTH]; 4];
         let mut t = [0.0; WIDTH];
         for k in lanes_of(active & computed) {
             let i0 = super::wrap_column(x0[k], w);
-            let i1 = if i0 + 1 == w { 0 } else { i0 + 1 };
             // Lookup::radiance's row.
             let j0 = (y_rows[k].floor().max(0.0) as usize).min(h - 2);
             texel_row[k] = j0 as f32;
-            let at = [
-                j0 * w + i0,
-                j0 * w + i1,
-                (j0 + 1) * w + i0,
-                (j0 + 1) * w + i1,
-            ];
-            for (texel, index) in texels.iter_mut().zip(at) {
-                let c = self.texels[index];
+            for (texel, c) in texels.iter_mut().zip(self.cell_texels(i0, j0)) {
                 (texel[0][k], texel[1][k], texel[2][k]) = (c.x, c.y, c.z);
             }
             // Lookup::pdf's cell.
-            if self.rows.is_some() {
+            if has_density {
                 let dk = Vec3::new(local_rows[0][k], local_rows[1][k], local_rows[2][k]);
                 let j = self.cell_row(dk.y, y_rows[k]);
                 t[k] = self.cell_t(j, dk);
@@ -205,13 +179,13 @@ impl Envmap {
 
         // ---- The bilinear radiance and density, in lanes ----
         let v = |a: &[f32; WIDTH]| f32x16::new(*a);
-        let radiance = lerp_texels(&texels, fx, clamp01(y - v(&texel_row)));
-        let pdf = if self.rows.is_none() {
-            [0.0; WIDTH]
-        } else {
-            let st = [clamp01(fx), v(&t)];
+        let radiance = lerp_texels(&texels, fx, clamp(y - v(&texel_row), 0.0, 1.0));
+        let pdf = if has_density {
+            let st = [clamp(fx, 0.0, 1.0), v(&t)];
             (warp::lanes::bilerp(st, corners.each_ref().map(v)) * f32x16::splat(self.inv_total))
                 .to_array()
+        } else {
+            [0.0; WIDTH]
         };
         for k in lanes_of(active) {
             out[k] = if computed & (1 << k) == 0 {
@@ -227,16 +201,16 @@ impl Envmap {
     }
 }
 
-/// `f32::clamp(a, 0, 1)` in lanes (NaN stays NaN).
+/// `f32::clamp(a, lo, hi)` in lanes (NaN stays NaN).
 #[inline(always)]
-fn clamp01(a: f32x16) -> f32x16 {
-    let (zero, one) = (f32x16::ZERO, f32x16::ONE);
-    let a = a.simd_lt(zero).select(zero, a);
-    a.simd_gt(one).select(one, a)
+fn clamp(a: f32x16, lo: f32, hi: f32) -> f32x16 {
+    let (lo, hi) = (f32x16::splat(lo), f32x16::splat(hi));
+    let a = a.simd_lt(lo).select(lo, a);
+    a.simd_gt(hi).select(hi, a)
 }
 
 /// [`Envmap::lerp_texels`] in lanes: the four texels `texels[corner][channel][lane]` in the
-/// order (i0, j), (i1, j), (i0, j + 1), (i1, j + 1), at fractions `fx` across and `fy`
+/// order of [`Envmap::cell_texels`], at fractions `fx` across and `fy`
 /// down; the radiance by channel.
 #[inline(always)]
 fn lerp_texels(texels: &[[[f32; WIDTH]; 3]; 4], fx: f32x16, fy: f32x16) -> [[f32; WIDTH]; 3] {
