@@ -8,23 +8,20 @@ use radia_math::{Ray, Spectrum};
 use radia_sampling::{SampleStream, Sampler};
 use radia_scene::Scene;
 
-/// One camera sample: its film position in pixels and as a fraction of the film (what the
-/// camera makes its ray from, [`CameraSample::ray`]), and its sample stream (past the film's
-/// dimensions).
-pub(crate) struct CameraSample<'a, S> {
-    pub pos: Vec2,
-    pub film: Vec2,
-    pub stream: SampleStream<'a, S>,
-}
+/// A tile's camera samples in the order their results go to the film
+/// (`renderer::TileSamples`). Each is started in a sample stream the caller holds, so that
+/// the packet loop writes a lane's stream in the lane's place: a stream made by the
+/// iterator and moved into the lane was read back in wide loads of its just-written narrow
+/// fields, which stall on store forwarding (a fifth of the packet loop's own time on
+/// `scenes/furnace.xml`, whose paths are short).
+pub(crate) trait CameraSamples<'a, S> {
+    /// A stream to start samples in.
+    fn stream(&self) -> SampleStream<'a, S>;
 
-impl<S> CameraSample<'_, S> {
-    /// The camera ray of the sample. (Made by the caller rather than with the sample: the
-    /// packet loop makes the rays of all the lanes it refills together, where their chains
-    /// of square roots and divisions overlap.)
-    #[inline(always)]
-    pub fn ray(&self, scene: &Scene) -> Ray {
-        scene.camera.generate_ray(self.film)
-    }
+    /// Starts the next camera sample in `stream` (past the film's dimensions) and gives its
+    /// film position in pixels and as a fraction of the film (what the camera makes its
+    /// ray from); `None` when the tile has no more.
+    fn next_into(&mut self, stream: &mut SampleStream<'a, S>) -> Option<(Vec2, Vec2)>;
 }
 
 pub(crate) trait Integrator: Sync {
@@ -45,16 +42,20 @@ pub(crate) trait Integrator: Sync {
     fn li_many<'a, S: Sampler + 'a>(
         &self,
         scene: &Scene,
-        samples: impl Iterator<Item = CameraSample<'a, S>>,
+        mut samples: impl CameraSamples<'a, S>,
         out: &mut [Traced],
         stats: &mut PathStats,
     ) {
-        for (o, mut cs) in out.iter_mut().zip(samples) {
-            let ray = cs.ray(scene);
+        let mut stream = samples.stream();
+        for o in out.iter_mut() {
+            let Some((pos, film)) = samples.next_into(&mut stream) else {
+                break;
+            };
+            let ray = scene.camera.generate_ray(film);
             let before = stats.rays;
-            let l = self.li(scene, ray, cs.pos, &mut cs.stream, stats);
+            let l = self.li(scene, ray, pos, &mut stream, stats);
             *o = Traced {
-                pos: cs.pos,
+                pos,
                 l,
                 rays: (stats.rays - before) as u32,
             };
@@ -96,7 +97,7 @@ impl Integrator for PathIntegrator {
     fn li_many<'a, S: Sampler + 'a>(
         &self,
         scene: &Scene,
-        samples: impl Iterator<Item = CameraSample<'a, S>>,
+        samples: impl CameraSamples<'a, S>,
         out: &mut [Traced],
         stats: &mut PathStats,
     ) {

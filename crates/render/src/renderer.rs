@@ -14,7 +14,7 @@ use crate::adaptive::{self, PilotStats};
 use crate::aov::{AovFilm, AovIntegrator, AovLayers};
 use crate::classic::ClassicIntegrator;
 use crate::film::{Film, Filter, FilterSampler, Image};
-use crate::integrator::{CameraSample, Integrator, Traced};
+use crate::integrator::{CameraSamples, Integrator, Traced};
 use crate::npr::NprIntegrator;
 use crate::path::{layout, PathIntegrator, PathStats};
 use glam::{UVec2, Vec2};
@@ -447,11 +447,13 @@ impl<'a, S: Sampler> TileSamples<'a, S> {
     }
 }
 
-impl<'a, S: Sampler> Iterator for TileSamples<'a, S> {
-    type Item = CameraSample<'a, S>;
+impl<'a, S: Sampler> CameraSamples<'a, S> for TileSamples<'a, S> {
+    fn stream(&self) -> SampleStream<'a, S> {
+        SampleStream::new(self.sampler, self.key, 0)
+    }
 
     #[inline]
-    fn next(&mut self) -> Option<Self::Item> {
+    fn next_into(&mut self, stream: &mut SampleStream<'a, S>) -> Option<(Vec2, Vec2)> {
         while self.s == self.s_end {
             if self.y >= self.y1 {
                 return None;
@@ -468,7 +470,7 @@ impl<'a, S: Sampler> Iterator for TileSamples<'a, S> {
             self.key = PixelKey::new(self.seed, UVec2::new(self.x, self.y));
         }
         let (x, y) = (self.x, self.y);
-        let mut stream = SampleStream::new(self.sampler, self.key, self.s);
+        stream.restart(self.key, self.s);
         stream.seek(layout::FILM);
         let u = stream.next_2d();
         let pos = match self.fis {
@@ -482,7 +484,7 @@ impl<'a, S: Sampler> Iterator for TileSamples<'a, S> {
         let size = &self.scene.film;
         let film = pos / Vec2::new(size.width as f32, size.height as f32);
         self.s += 1;
-        Some(CameraSample { pos, film, stream })
+        Some((pos, film))
     }
 }
 
@@ -608,9 +610,10 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
                 };
                 if E::PER_SAMPLE {
                     // One sample at a time, with its extras beside it.
-                    for mut cs in samples {
-                        let (pos, ray) = (cs.pos, cs.ray(scene));
-                        let stream = &mut cs.stream;
+                    let mut samples = samples;
+                    let stream = &mut samples.stream();
+                    while let Some((pos, film)) = samples.next_into(stream) {
+                        let ray = scene.camera.generate_ray(film);
                         let (px, py) = sample_pixels.next().expect("one pixel per sample");
                         extras.add(scene, &mut tile_extras, pos, own((px, py), pos), &ray);
                         let before = pstats.rays;

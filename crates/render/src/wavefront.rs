@@ -9,7 +9,7 @@
 //! values, and the tile loop adds the results to the film in the order of the samples, so
 //! the image is the one `li` renders, bit for bit.
 
-use crate::integrator::{CameraSample, Traced};
+use crate::integrator::{CameraSamples, Traced};
 use crate::path::{PathIntegrator, PathState, PathStats, PendingShadow};
 use glam::{Vec2, Vec3};
 use radia_math::Spectrum;
@@ -21,7 +21,8 @@ use radia_scene::{
 /// Paths in flight per packet.
 pub const LANES: usize = PACKET_LANES;
 
-/// A path in flight and where its result goes.
+/// A path in flight and where its result goes (or, in a lane without a path, the last one's
+/// stale state, overwritten field by field when the lane takes the next camera sample).
 struct Lane<'a, S> {
     /// The index of its camera sample (its place in the output).
     slot: usize,
@@ -37,11 +38,20 @@ struct Lane<'a, S> {
 pub(crate) fn li_many<'a, S: Sampler + 'a>(
     integrator: &PathIntegrator,
     scene: &Scene,
-    mut samples: impl Iterator<Item = CameraSample<'a, S>>,
+    mut samples: impl CameraSamples<'a, S>,
     out: &mut [Traced],
     stats: &mut PathStats,
 ) {
-    let mut lanes: [Option<Lane<'a, S>>; LANES] = std::array::from_fn(|_| None);
+    let mut lanes: [Lane<'a, S>; LANES] = std::array::from_fn(|_| Lane {
+        slot: 0,
+        pos: Vec2::ZERO,
+        stream: samples.stream(),
+        path: PathState::UNSTARTED,
+        shadow: None,
+        rays: 0,
+    });
+    // Bit k: lane k holds a path.
+    let mut live = 0u32;
     let mut next = 0usize;
     let mut hits: [Option<SurfaceInteraction>; LANES] = [None; LANES];
     // Made once: each step clears the active lanes only (stale rays in inactive lanes are
@@ -63,24 +73,23 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         // ray is a chain of a division and two square roots, and made one lane at a time
         // between the sampler's work the chains ran one after another (a fifth of the
         // loop's own time on `scenes/furnace.xml`, whose paths are short).
+        // Each lane's fields are written in place (see `CameraSamples`).
         let mut fresh = 0u32;
         let mut films = [[0.0; LANES]; 2];
         for (k, lane) in lanes.iter_mut().enumerate() {
-            if lane.is_some() || next == out.len() {
+            if live & (1 << k) != 0 || next == out.len() {
                 continue;
             }
-            let Some(cs) = samples.next() else { break };
+            let Some((pos, film)) = samples.next_into(&mut lane.stream) else {
+                break;
+            };
             next += 1;
-            (films[0][k], films[1][k]) = (cs.film.x, cs.film.y);
+            (films[0][k], films[1][k]) = (film.x, film.y);
             fresh |= 1 << k;
-            *lane = Some(Lane {
-                slot: next - 1,
-                pos: cs.pos,
-                stream: cs.stream,
-                path: PathState::UNSTARTED,
-                shadow: None,
-                rays: 0,
-            });
+            lane.slot = next - 1;
+            lane.pos = pos;
+            lane.shadow = None;
+            lane.rays = 0;
         }
         let camera_rays = (fresh != 0).then(|| scene.camera.generate_rays(&films));
         for k in (0..LANES).filter(|k| fresh & (1 << k) != 0) {
@@ -88,30 +97,30 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
                 .as_ref()
                 .expect("made for the fresh lanes")
                 .ray(k);
-            let lane = lanes[k].as_mut().expect("a lane just filled");
+            let lane = &mut lanes[k];
             match integrator.start(ray) {
-                Some(path) => lane.path = path,
+                Some(path) => {
+                    lane.path = path;
+                    live |= 1 << k;
+                }
                 None => {
                     // max_depth 0: nothing is seen.
                     out[lane.slot] = Traced {
                         pos: lane.pos,
                         ..Traced::EMPTY
                     };
-                    lanes[k] = None;
                 }
             }
         }
-        if lanes.iter().all(Option::is_none) {
+        if live == 0 {
             return;
         }
 
         // ---- Closest hits, all lanes at once ----
         rays.active = 0;
-        for (k, lane) in lanes.iter_mut().enumerate() {
-            if let Some(lane) = lane {
-                rays.set(k, &lane.path.ray);
-                lane.rays += 1;
-            }
+        for (k, lane) in in_use(&mut lanes, live) {
+            rays.set(k, &lane.path.ray);
+            lane.rays += 1;
         }
         stats.rays += u64::from(rays.active.count_ones());
         scene.intersect_packet(&rays, &mut hits);
@@ -121,8 +130,7 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         // samples its own, `Scene::samples_lights_in_lanes`.)
         let mut asks = 0u32;
         if integrator.batches_lights() {
-            for (k, lane) in lanes.iter_mut().enumerate() {
-                let Some(lane) = lane else { continue };
+            for (k, lane) in in_use(&mut lanes, live) {
                 let query =
                     integrator.light_query(scene, &lane.path, hits[k].as_ref(), &mut lane.stream);
                 if let Some(q) = query {
@@ -145,8 +153,8 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         let mut escaped = 0u32;
         if let Some(map) = environment_map {
             let mut d = [[0.0; LANES]; 3];
-            for (k, lane) in lanes.iter().enumerate() {
-                if let (Some(lane), None) = (lane, &hits[k]) {
+            for (k, lane) in in_use(&mut lanes, live) {
+                if hits[k].is_none() {
                     escaped |= 1 << k;
                     (d[0][k], d[1][k], d[2][k]) = lane.path.ray.d.into();
                 }
@@ -157,37 +165,35 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         }
 
         // ---- Each path's bounce: emission, NEE, BSDF sample ----
-        let mut goes_on = [false; LANES];
-        for (k, lane) in lanes.iter_mut().enumerate() {
-            if let Some(lane) = lane {
-                // Its rays as `li` counts them: the closest hit (above), and those the
-                // bounce traces or will (shadow ray, emitters skipped).
-                let before = stats.rays;
-                goes_on[k] = integrator.bounce(
-                    scene,
-                    &mut lane.path,
-                    hits[k].as_ref(),
-                    (asks & (1 << k) != 0).then_some(&light_samples[k]),
-                    (escaped & (1 << k) != 0).then_some(&escapes[k]),
-                    &mut lane.stream,
-                    stats,
-                    &mut lane.shadow,
-                );
-                lane.rays += (stats.rays - before) as u32;
-            }
+        let mut ends = 0u32;
+        for (k, lane) in in_use(&mut lanes, live) {
+            // Its rays as `li` counts them: the closest hit (above), and those the bounce
+            // traces or will (shadow ray, emitters skipped).
+            let before = stats.rays;
+            let goes_on = integrator.bounce(
+                scene,
+                &mut lane.path,
+                hits[k].as_ref(),
+                (asks & (1 << k) != 0).then_some(&light_samples[k]),
+                (escaped & (1 << k) != 0).then_some(&escapes[k]),
+                &mut lane.stream,
+                stats,
+                &mut lane.shadow,
+            );
+            lane.rays += (stats.rays - before) as u32;
+            ends |= u32::from(!goes_on) << k;
         }
 
         // ---- Shadow rays, made and traced all lanes at once ----
-        let mut ends = ShadowLanes::new();
-        for (k, lane) in lanes.iter().enumerate() {
-            if let Some(shadow) = lane.as_ref().and_then(|l| l.shadow.as_ref()) {
-                ends.push(k, &shadow.ends);
+        let mut shadow_ends = ShadowLanes::new();
+        for (k, lane) in in_use(&mut lanes, live) {
+            if let Some(shadow) = &lane.shadow {
+                shadow_ends.push(k, &shadow.ends);
             }
         }
-        ends.write(&mut shadows);
+        shadow_ends.write(&mut shadows);
         let blocked = scene.occluded_packet(&shadows);
-        for (k, lane) in lanes.iter_mut().enumerate() {
-            let Some(lane) = lane else { continue };
+        for (k, lane) in in_use(&mut lanes, live) {
             // Read in place (a copy made just before its fields are read stalls on store
             // forwarding).
             if let Some(shadow) = &lane.shadow {
@@ -202,16 +208,22 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         }
 
         // ---- Finished paths give up their lanes ----
-        for (k, slot) in lanes.iter_mut().enumerate() {
-            if !goes_on[k] {
-                if let Some(lane) = slot.take() {
-                    out[lane.slot] = Traced {
-                        pos: lane.pos,
-                        l: lane.path.result,
-                        rays: lane.rays,
-                    };
-                }
-            }
+        for (_, lane) in in_use(&mut lanes, ends) {
+            out[lane.slot] = Traced {
+                pos: lane.pos,
+                l: lane.path.result,
+                rays: lane.rays,
+            };
         }
+        live &= !ends;
     }
+}
+
+/// The lanes whose bits are set in `mask`, with their indices.
+#[inline(always)]
+fn in_use<T>(lanes: &mut [T; LANES], mask: u32) -> impl Iterator<Item = (usize, &mut T)> {
+    lanes
+        .iter_mut()
+        .enumerate()
+        .filter(move |(k, _)| mask & (1 << k) != 0)
 }

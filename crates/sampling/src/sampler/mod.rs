@@ -113,6 +113,17 @@ impl<'a, S: Sampler + ?Sized> SampleStream<'a, S> {
         }
     }
 
+    /// Makes this the stream of sample `index` of the pixel `key`, in place (as
+    /// [`SampleStream::new`] with the same sampler).
+    #[inline]
+    pub fn restart(&mut self, key: PixelKey, index: u32) {
+        self.key = key;
+        self.index = index;
+        self.dim = 0;
+        self.prepared = self.sampler.prepare(key, index);
+        self.block = u32::MAX - 1;
+    }
+
     /// Continues at dimension `dim` (the start of a block of the integrator's layout).
     #[inline]
     pub fn seek(&mut self, dim: u32) {
