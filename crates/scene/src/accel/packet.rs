@@ -196,6 +196,15 @@ impl State {
 //   segments), else as one packet: 10⁶-triangle shadow segments 0.90–0.96 (1.0–1.05 before),
 //   light 0.89, camera 0.44–0.58.
 //
+// * In the path loop (`radia render`, 256², 64 spp, one thread), where bounce and shadow
+//   rays of a packet leave sixteen points of a tile in all directions: the split by octant
+//   handed nearly every lane of scenes/face-normals.xml (two 120-triangle spheres, a BVH8
+//   of 4 levels) to the single-ray traversal (of 11.3 M lanes, 8.4 M went alone from the
+//   root), and one packet in the first lane's order took 0.90–0.91 of the time. With the
+//   same scene's spheres made of 2 K, 25 K, 250 K and 1 M triangles (BVH8 depth 6, 9, 14
+//   and 17), one packet took 0.95, 0.95, 0.99–1.05 and 1.02–1.05 of the time: the order
+//   of children matters from about 12 levels on.
+//
 // Hence: shallow trees take one packet in the first lane's order; in trees deeper than
 // [`ORDERED_ABOVE_DEPTH`], occlusion takes one packet in the first lane's order if some
 // octant has [`OCTANT_PACKET_FROM`] lanes (else every lane alone), and closest hit one packet
@@ -214,10 +223,10 @@ const LEAF_PACKET_FROM: u32 = 4;
 const OCTANT_PACKET_FROM: u32 = 8;
 
 /// Closest-hit packets over BVHs of more levels than this are split by octant, and
-/// occlusion packets checked for coherence (a BVH8 of three levels holds up to about 1500
-/// primitives, the Cornell box's two levels 32): in a shallow tree the order of children
-/// hardly matters, and the split costs more than it saves.
-const ORDERED_ABOVE_DEPTH: usize = 3;
+/// occlusion packets checked for coherence (obvhs' PLOC-built BVH8 of a 25 K-triangle mesh
+/// has 9 levels, of 250 K 14): in a shallower tree the order of children hardly matters,
+/// and the split costs more than it saves (see the measurements above).
+const ORDERED_ABOVE_DEPTH: usize = 12;
 
 /// When a packet query hands lanes to the single-ray code: the constants above by default;
 /// public so that tests can force every path (all-packet traversal, either child order).
