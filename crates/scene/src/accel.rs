@@ -2,6 +2,14 @@
 //! watertight triangle intersection and analytic spheres and disks.
 
 mod chunked;
+#[cfg(all(
+    target_arch = "x86_64",
+    any(
+        target_feature = "avx512f",
+        all(target_feature = "avx2", target_feature = "fma")
+    )
+))]
+mod lanes16;
 mod packet;
 mod wide;
 

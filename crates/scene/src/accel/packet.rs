@@ -307,13 +307,18 @@ impl Accel {
             return;
         }
         let shared = self.packets_pay();
-        #[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
+        #[cfg(all(
+            target_arch = "x86_64",
+            any(
+                target_feature = "avx512f",
+                all(target_feature = "avx2", target_feature = "fma")
+            )
+        ))]
         if shared {
             // Deeper trees than the fixed stack allows (pathological geometry, see
             // `Accel::with_stack`) go ray by ray.
             if self.flat || self.depth < super::wide::STACK_SIZE {
-                // SAFETY: AVX-512F is available (compile-time check above).
-                unsafe { avx512::query::<ANY_HIT>(self, shapes, rays, rules, st) };
+                kernel::query::<ANY_HIT>(self, shapes, rays, rules, st);
                 return;
             }
         }
@@ -339,12 +344,18 @@ impl Accel {
     }
 }
 
-#[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
-mod avx512 {
+#[cfg(all(
+    target_arch = "x86_64",
+    any(
+        target_feature = "avx512f",
+        all(target_feature = "avx2", target_feature = "fma")
+    )
+))]
+mod kernel {
     use super::*;
+    use crate::accel::lanes16::{store_u32_where, D8, F16, M16, M8};
     use crate::accel::{wide, Found, WatertightRay};
     use obvhs::cwbvh::node::CwBvhNode;
-    use std::arch::x86_64::*;
 
     /// The node test's relative slack, as `wide`'s (see its `avx2::intersect_node`).
     const BOX_SLACK: f32 = radia_math::float::gamma(4);
@@ -352,66 +363,63 @@ mod avx512 {
     /// Per-packet constants of the node and triangle tests, lane by lane what `NodeRay` and
     /// `WatertightRay` hold for one ray.
     struct PacketRay<'a> {
-        o: [__m512; 3],
+        o: [F16; 3],
         /// 1 / d (±∞ for a zero component), and its magnitude.
-        inv: [__m512; 3],
-        inv_abs: [__m512; 3],
-        /// Lanes whose near plane on this axis is the max plane (1 / d < 0).
-        neg: [__mmask16; 3],
+        inv: [F16; 3],
+        inv_abs: [F16; 3],
+        /// Lanes whose near plane on this axis is the max plane (1 / d < 0), as a mask and
+        /// as bits.
+        neg: [M16; 3],
+        neg_bits: [u16; 3],
         /// The watertight frame: o[k_j] and the shear s_j per lane.
-        ok: [__m512; 3],
-        s: [__m512; 3],
+        ok: [F16; 3],
+        s: [F16; 3],
         /// `ksel[j][a]`: lanes whose k_j is axis a (a = 0, 1; the rest have axis 2).
-        ksel: [[__mmask16; 2]; 3],
+        ksel: [[M16; 2]; 3],
         /// The rays, for the tests done one lane at a time.
         packet: &'a RayPacket,
     }
 
     /// Per lane, `x` where `m[0]` is set, else `y` where `m[1]` is set, else `z`.
     #[inline(always)]
-    unsafe fn select3(m: [__mmask16; 2], [x, y, z]: [__m512; 3]) -> __m512 {
-        _mm512_mask_blend_ps(m[0], _mm512_mask_blend_ps(m[1], z, y), x)
+    fn select3(m: [M16; 2], [x, y, z]: [F16; 3]) -> F16 {
+        m[0].blend(m[1].blend(z, y), x)
     }
 
     impl<'a> PacketRay<'a> {
         #[inline(always)]
-        unsafe fn new(p: &'a RayPacket) -> Self {
-            let load = |v: &[f32; PACKET_LANES]| _mm512_loadu_ps(v.as_ptr());
-            let o = [load(&p.o[0]), load(&p.o[1]), load(&p.o[2])];
-            let d = [load(&p.d[0]), load(&p.d[1]), load(&p.d[2])];
-            let one = _mm512_set1_ps(1.0);
+        fn new(p: &'a RayPacket) -> Self {
+            let o = [F16::load(&p.o[0]), F16::load(&p.o[1]), F16::load(&p.o[2])];
+            let d = [F16::load(&p.d[0]), F16::load(&p.d[1]), F16::load(&p.d[2])];
+            let one = F16::splat(1.0);
             // `NodeRay::new`: Vec3A::ONE / d, per component.
-            let inv = d.map(|v| _mm512_div_ps(one, v));
-            let inv_abs = inv.map(|v| _mm512_abs_ps(v));
-            let zero = _mm512_setzero_ps();
-            let neg = inv.map(|v| _mm512_cmp_ps_mask::<_CMP_LT_OQ>(v, zero));
+            let inv = d.map(|v| one / v);
+            let inv_abs = inv.map(|v| v.abs());
+            let zero = F16::zero();
+            let neg = inv.map(|v| v.lt(zero));
 
             // `WatertightRay::new` in lanes (the same comparisons, division and products):
             // k_z the dominant axis of |d|, k_x and k_y the next ones, swapped when d[k_z] < 0.
-            let a = d.map(|v| _mm512_abs_ps(v));
-            let gt = |x, y| _mm512_cmp_ps_mask::<_CMP_GT_OQ>(x, y);
-            let x_over_y = gt(a[0], a[1]);
-            let kz0 = x_over_y & gt(a[0], a[2]);
-            let kz1 = !x_over_y & gt(a[1], a[2]);
+            let a = d.map(|v| v.abs());
+            let x_over_y = a[0].gt(a[1]);
+            let kz0 = x_over_y & a[0].gt(a[2]);
+            let kz1 = !x_over_y & a[1].gt(a[2]);
             let kz2 = !(kz0 | kz1);
             let dz = select3([kz0, kz1], d);
-            let swap = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(dz, zero);
+            let swap = dz.lt(zero);
             // Unswapped, k_z = 0, 1, 2 gives k_x = 1, 2, 0 and k_y = 2, 0, 1.
             let kx = [(kz2 & !swap) | (kz1 & swap), (kz0 & !swap) | (kz2 & swap)];
             let ky = [(kz1 & !swap) | (kz2 & swap), (kz2 & !swap) | (kz0 & swap)];
             let kz = [kz0, kz1];
-            let sz = _mm512_div_ps(one, dz);
+            let sz = one / dz;
             Self {
                 o,
                 inv,
                 inv_abs,
                 neg,
+                neg_bits: neg.map(|m| m.bits()),
                 ok: [select3(kx, o), select3(ky, o), select3(kz, o)],
-                s: [
-                    _mm512_mul_ps(select3(kx, d), sz),
-                    _mm512_mul_ps(select3(ky, d), sz),
-                    sz,
-                ],
+                s: [select3(kx, d) * sz, select3(ky, d) * sz, sz],
                 ksel: [kx, ky, kz],
                 packet: p,
             }
@@ -425,20 +433,19 @@ mod avx512 {
 
         /// Coordinate k_j of `p` per lane.
         #[inline(always)]
-        unsafe fn select(&self, j: usize, p: Vec3) -> __m512 {
-            let yz =
-                _mm512_mask_blend_ps(self.ksel[j][1], _mm512_set1_ps(p.z), _mm512_set1_ps(p.y));
-            _mm512_mask_blend_ps(self.ksel[j][0], yz, _mm512_set1_ps(p.x))
+        fn select(&self, j: usize, p: Vec3) -> F16 {
+            let yz = self.ksel[j][1].blend(F16::splat(p.z), F16::splat(p.y));
+            self.ksel[j][0].blend(yz, F16::splat(p.x))
         }
     }
 
     /// The result of one triangle against the lanes.
     struct TriangleHits {
-        hit: __mmask16,
-        exact: __mmask16,
-        t: __m512,
-        b1: __m512,
-        b2: __m512,
+        hit: u16,
+        exact: u16,
+        t: F16,
+        b1: F16,
+        b2: F16,
     }
 
     /// The watertight test of triangle `p` against the lanes `lanes` of the packet, with the
@@ -446,54 +453,36 @@ mod avx512 {
     /// no FMA, the same products and sums), so every lane gets the scalar test's bits; lanes
     /// with an exactly zero edge function are reported in `exact`, not decided.
     #[inline(always)]
-    unsafe fn triangle(
-        r: &PacketRay,
-        p: &[Vec3; 3],
-        lanes: __mmask16,
-        t_max: __m512,
-    ) -> TriangleHits {
+    fn triangle(r: &PacketRay, p: &[Vec3; 3], lanes: u16, t_max: F16) -> TriangleHits {
         let shear = |v: Vec3| {
-            let ax = _mm512_sub_ps(r.select(0, v), r.ok[0]);
-            let ay = _mm512_sub_ps(r.select(1, v), r.ok[1]);
-            let az = _mm512_sub_ps(r.select(2, v), r.ok[2]);
-            (
-                _mm512_sub_ps(ax, _mm512_mul_ps(r.s[0], az)),
-                _mm512_sub_ps(ay, _mm512_mul_ps(r.s[1], az)),
-                _mm512_mul_ps(r.s[2], az),
-            )
+            let ax = r.select(0, v) - r.ok[0];
+            let ay = r.select(1, v) - r.ok[1];
+            let az = r.select(2, v) - r.ok[2];
+            (ax - r.s[0] * az, ay - r.s[1] * az, r.s[2] * az)
         };
         let (ax, ay, az) = shear(p[0]);
         let (bx, by, bz) = shear(p[1]);
         let (cx, cy, cz) = shear(p[2]);
-        let u = _mm512_sub_ps(_mm512_mul_ps(cx, by), _mm512_mul_ps(cy, bx));
-        let v = _mm512_sub_ps(_mm512_mul_ps(ax, cy), _mm512_mul_ps(ay, cx));
-        let w = _mm512_sub_ps(_mm512_mul_ps(bx, ay), _mm512_mul_ps(by, ax));
-        let zero = _mm512_setzero_ps();
-        let exact = _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(u, zero)
-            | _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(v, zero)
-            | _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(w, zero);
-        let neg = _mm512_cmp_ps_mask::<_CMP_LT_OQ>(u, zero)
-            | _mm512_cmp_ps_mask::<_CMP_LT_OQ>(v, zero)
-            | _mm512_cmp_ps_mask::<_CMP_LT_OQ>(w, zero);
-        let pos = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(u, zero)
-            | _mm512_cmp_ps_mask::<_CMP_GT_OQ>(v, zero)
-            | _mm512_cmp_ps_mask::<_CMP_GT_OQ>(w, zero);
-        let det = _mm512_add_ps(_mm512_add_ps(u, v), w);
-        let t_scaled = _mm512_add_ps(
-            _mm512_add_ps(_mm512_mul_ps(u, az), _mm512_mul_ps(v, bz)),
-            _mm512_mul_ps(w, cz),
-        );
-        let inv_det = _mm512_div_ps(_mm512_set1_ps(1.0), det);
-        let t = _mm512_mul_ps(t_scaled, inv_det);
-        let reject = (neg & pos) | _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(det, zero);
-        let in_range =
-            _mm512_cmp_ps_mask::<_CMP_GT_OQ>(t, zero) & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(t, t_max);
+        let u = cx * by - cy * bx;
+        let v = ax * cy - ay * cx;
+        let w = bx * ay - by * ax;
+        let zero = F16::zero();
+        let exact = u.eq(zero) | v.eq(zero) | w.eq(zero);
+        let neg = u.lt(zero) | v.lt(zero) | w.lt(zero);
+        let pos = u.gt(zero) | v.gt(zero) | w.gt(zero);
+        let det = u + v + w;
+        let t_scaled = u * az + v * bz + w * cz;
+        let inv_det = F16::splat(1.0) / det;
+        let t = t_scaled * inv_det;
+        let reject = (neg & pos) | det.eq(zero);
+        let in_range = t.gt(zero) & t.lt(t_max);
+        let exact = exact.bits() & lanes;
         TriangleHits {
-            hit: in_range & !(reject | exact) & lanes,
-            exact: exact & lanes,
+            hit: (in_range & !reject).bits() & !exact & lanes,
+            exact,
             t,
-            b1: _mm512_mul_ps(v, inv_det),
-            b2: _mm512_mul_ps(w, inv_det),
+            b1: v * inv_det,
+            b2: w * inv_det,
         }
     }
 
@@ -502,29 +491,19 @@ mod avx512 {
     /// slack, fused multiply-adds and NaN handling), so a lane reaches the children its
     /// single-ray traversal would reach with the same t_max.
     #[inline(always)]
-    unsafe fn children(
-        node: &CwBvhNode,
-        r: &PacketRay,
-        lanes: __mmask16,
-        t_max: __m512,
-    ) -> [u16; 8] {
-        let mut scale = [_mm512_setzero_ps(); 3];
-        let mut o_near = [_mm512_setzero_ps(); 3];
-        let mut o_far = [_mm512_setzero_ps(); 3];
+    fn children(node: &CwBvhNode, r: &PacketRay, lanes: u16, t_max: F16) -> [u16; 8] {
+        let mut scale = [F16::zero(); 3];
+        let mut o_near = [F16::zero(); 3];
+        let mut o_far = [F16::zero(); 3];
         for a in 0..3 {
             let step = f32::from_bits((node.e[a] as u32) << 23);
-            let from_origin = _mm512_sub_ps(_mm512_set1_ps(node.p[a]), r.o[a]);
-            scale[a] = _mm512_mul_ps(_mm512_set1_ps(step), r.inv[a]);
-            let offset = _mm512_mul_ps(from_origin, r.inv[a]);
-            let slack = _mm512_mul_ps(
-                _mm512_mul_ps(
-                    _mm512_add_ps(_mm512_abs_ps(from_origin), _mm512_set1_ps(step * 255.0)),
-                    r.inv_abs[a],
-                ),
-                _mm512_set1_ps(BOX_SLACK),
-            );
-            o_near[a] = _mm512_sub_ps(offset, slack);
-            o_far[a] = _mm512_add_ps(offset, slack);
+            let from_origin = F16::splat(node.p[a]) - r.o[a];
+            scale[a] = F16::splat(step) * r.inv[a];
+            let offset = from_origin * r.inv[a];
+            let slack = (from_origin.abs() + F16::splat(step * 255.0)) * r.inv_abs[a]
+                * F16::splat(BOX_SLACK);
+            o_near[a] = offset - slack;
+            o_far[a] = offset + slack;
         }
         let planes = [
             (&node.child_min_x, &node.child_max_x),
@@ -536,25 +515,25 @@ mod avx512 {
             if node.child_meta[c] == 0 {
                 continue;
             }
-            let mut t_near = _mm512_setzero_ps();
+            let mut t_near = F16::zero();
             let mut t_far = t_max;
             for (a, (lo, hi)) in planes.iter().enumerate() {
-                let (lo, hi) = (_mm512_set1_ps(lo[c] as f32), _mm512_set1_ps(hi[c] as f32));
-                let near = _mm512_mask_blend_ps(r.neg[a], lo, hi);
-                let far = _mm512_mask_blend_ps(r.neg[a], hi, lo);
+                let (lo, hi) = (F16::splat(lo[c] as f32), F16::splat(hi[c] as f32));
+                let near = r.neg[a].blend(lo, hi);
+                let far = r.neg[a].blend(hi, lo);
                 // `vmaxps`/`vminps` return the second operand when either is NaN, as in
                 // the single-ray test: a NaN distance keeps the interval.
-                t_near = _mm512_max_ps(_mm512_fmadd_ps(near, scale[a], o_near[a]), t_near);
-                t_far = _mm512_min_ps(_mm512_fmadd_ps(far, scale[a], o_far[a]), t_far);
+                t_near = near.mul_add(scale[a], o_near[a]).max(t_near);
+                t_far = far.mul_add(scale[a], o_far[a]).min(t_far);
             }
-            *m = _mm512_mask_cmp_ps_mask::<_CMP_LE_OQ>(lanes, t_near, t_far);
+            *m = t_near.le(t_far).bits() & lanes;
         }
         out
     }
 
     /// Primitive `prim` against the lanes `lanes` (all live).
     #[inline(always)]
-    unsafe fn primitive<const ANY_HIT: bool>(
+    fn primitive<const ANY_HIT: bool>(
         accel: &Accel,
         shapes: &[Shape],
         r: &PacketRay,
@@ -568,7 +547,7 @@ mod avx512 {
                 for half in 0..2 {
                     let part = (lanes >> (8 * half)) as u8;
                     if part != 0 {
-                        sphere::<ANY_HIT>(r.packet, st, prim, center, radius, half, part);
+                        sphere::<ANY_HIT>(r, st, prim, center, radius, half, part);
                     }
                 }
             } else {
@@ -577,25 +556,17 @@ mod avx512 {
             return;
         }
         let p = accel.lanes.triangle(prim);
-        let h = triangle(r, &p, lanes as u16, _mm512_load_ps(st.t.as_ptr()));
+        let h = triangle(r, &p, lanes as u16, F16::load(&st.t));
         if h.hit != 0 {
             st.hit |= h.hit as u32;
             if ANY_HIT {
                 st.live &= !(h.hit as u32);
             } else {
-                _mm512_mask_store_ps(st.t.as_mut_ptr(), h.hit, h.t);
-                _mm512_mask_store_ps(st.b1.as_mut_ptr(), h.hit, h.b1);
-                _mm512_mask_store_ps(st.b2.as_mut_ptr(), h.hit, h.b2);
-                _mm512_mask_store_epi32(
-                    st.prim.as_mut_ptr() as *mut i32,
-                    h.hit,
-                    _mm512_set1_epi32(prim as i32),
-                );
-                _mm512_mask_store_epi32(
-                    st.inner.as_mut_ptr() as *mut i32,
-                    h.hit,
-                    _mm512_setzero_si512(),
-                );
+                h.t.store_where(&mut st.t, h.hit);
+                h.b1.store_where(&mut st.b1, h.hit);
+                h.b2.store_where(&mut st.b2, h.hit);
+                store_u32_where(&mut st.prim, h.hit, prim as u32);
+                store_u32_where(&mut st.inner, h.hit, 0);
             }
         }
         if h.exact != 0 {
@@ -608,8 +579,8 @@ mod avx512 {
     /// its order (the offset from the centre in single precision, then widened; no FMA), so
     /// that every lane gets the scalar test's bits.
     #[inline(always)]
-    unsafe fn sphere<const ANY_HIT: bool>(
-        rays: &RayPacket,
+    fn sphere<const ANY_HIT: bool>(
+        r: &PacketRay,
         st: &mut State,
         prim: usize,
         center: Vec3,
@@ -617,75 +588,49 @@ mod avx512 {
         half: usize,
         lanes: u8,
     ) {
-        let at = 8 * half;
-        let load = |v: &[f32; PACKET_LANES]| _mm256_loadu_ps(v.as_ptr().add(at));
         let c = [center.x, center.y, center.z];
-        let o: [__m512d; 3] = std::array::from_fn(|a| {
-            _mm512_cvtps_pd(_mm256_sub_ps(load(&rays.o[a]), _mm256_set1_ps(c[a])))
-        });
-        let d: [__m512d; 3] = std::array::from_fn(|a| _mm512_cvtps_pd(load(&rays.d[a])));
-        let dot = |u: &[__m512d; 3], v: &[__m512d; 3]| {
-            _mm512_add_pd(
-                _mm512_add_pd(_mm512_mul_pd(u[0], v[0]), _mm512_mul_pd(u[1], v[1])),
-                _mm512_mul_pd(u[2], v[2]),
-            )
-        };
-        let r = radius as f64;
+        let o: [D8; 3] = std::array::from_fn(|a| (r.o[a] - F16::splat(c[a])).half_to_f64(half));
+        let d: [D8; 3] =
+            std::array::from_fn(|a| F16::load(&r.packet.d[a]).half_to_f64(half));
+        let dot = |u: &[D8; 3], v: &[D8; 3]| u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+        let rad = radius as f64;
         let a = dot(&d, &d);
-        let b = _mm512_mul_pd(_mm512_set1_pd(2.0), dot(&o, &d));
-        let c = _mm512_sub_pd(dot(&o, &o), _mm512_set1_pd(r * r));
-        let disc = _mm512_sub_pd(
-            _mm512_mul_pd(b, b),
-            _mm512_mul_pd(_mm512_mul_pd(_mm512_set1_pd(4.0), a), c),
-        );
-        let zero = _mm512_setzero_pd();
+        let b = D8::splat(2.0) * dot(&o, &d);
+        let c = dot(&o, &o) - D8::splat(rad * rad);
+        let disc = b * b - D8::splat(4.0) * a * c;
+        let zero = D8::zero();
         // `disc < 0` has no root; a NaN fails every comparison below, as in the scalar test.
-        let real = _mm512_mask_cmp_pd_mask::<_CMP_NLT_UQ>(lanes, disc, zero);
-        if real == 0 {
+        let real = disc.nlt(zero) & M8::from_bits(lanes);
+        if real.bits() == 0 {
             return;
         }
-        let sq = _mm512_sqrt_pd(disc);
-        let b_neg = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(b, zero);
-        let q = _mm512_mul_pd(
-            _mm512_set1_pd(-0.5),
-            _mm512_mask_blend_pd(b_neg, _mm512_add_pd(b, sq), _mm512_sub_pd(b, sq)),
-        );
-        let (t0, t1) = (_mm512_div_pd(q, a), _mm512_div_pd(c, q));
-        let swap = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(t0, t1);
-        let (near, far) = (
-            _mm512_mask_blend_pd(swap, t0, t1),
-            _mm512_mask_blend_pd(swap, t1, t0),
-        );
-        let t_max = _mm512_cvtps_pd(_mm256_loadu_ps(st.t.as_ptr().add(at)));
-        let inside = |t| {
-            _mm512_cmp_pd_mask::<_CMP_GT_OQ>(t, zero) & _mm512_cmp_pd_mask::<_CMP_LT_OQ>(t, t_max)
-        };
+        let sq = disc.sqrt();
+        let b_neg = b.lt(zero);
+        let q = D8::splat(-0.5) * b_neg.blend(b + sq, b - sq);
+        let (t0, t1) = (q / a, c / q);
+        let swap = t0.gt(t1);
+        let (near, far) = (swap.blend(t0, t1), swap.blend(t1, t0));
+        let t_max = F16::load(&st.t).half_to_f64(half);
+        let inside = |t: D8| t.gt(zero) & t.lt(t_max);
         let (near_ok, far_ok) = (inside(near) & real, inside(far) & real);
-        let hit = near_ok | far_ok;
+        let hit = (near_ok | far_ok).bits();
         if hit == 0 {
             return;
         }
-        let t = _mm512_cvtpd_ps(_mm512_mask_blend_pd(near_ok, far, near));
-        let wide_hit = (hit as u32) << at;
+        let t = near_ok.blend(far, near);
+        let wide_hit = (hit as u32) << (8 * half);
         st.hit |= wide_hit;
         if ANY_HIT {
             st.live &= !wide_hit;
         } else {
-            let m = hit as __mmask8;
-            _mm256_mask_storeu_ps(st.t.as_mut_ptr().add(at), m, t);
-            let zero = _mm256_setzero_ps();
-            _mm256_mask_storeu_ps(st.b1.as_mut_ptr().add(at), m, zero);
-            _mm256_mask_storeu_ps(st.b2.as_mut_ptr().add(at), m, zero);
-            let none = _mm256_setzero_si256();
-            _mm256_mask_storeu_epi32(
-                st.prim.as_mut_ptr().add(at) as *mut i32,
-                m,
-                _mm256_set1_epi32(prim as i32),
-            );
-            _mm256_mask_storeu_epi32(st.inner.as_mut_ptr().add(at) as *mut i32, m, none);
+            let m = wide_hit as u16;
+            t.store_f32_where(&mut st.t, half, hit);
+            F16::zero().store_where(&mut st.b1, m);
+            F16::zero().store_where(&mut st.b2, m);
+            store_u32_where(&mut st.prim, m, prim as u32);
+            store_u32_where(&mut st.inner, m, 0);
         }
     }
-
     /// Primitive `prim` by the scalar test, lane by lane.
     #[inline(never)]
     fn one_by_one<const ANY_HIT: bool>(
@@ -784,9 +729,9 @@ mod avx512 {
     /// depth < `wide::STACK_SIZE` holds fewer than 8 entries per level.
     const STACK: usize = 8 * wide::STACK_SIZE;
 
-    /// # Safety
-    /// AVX-512F must be available; `accel` is flat or shallower than `wide::STACK_SIZE`.
-    pub(super) unsafe fn query<const ANY_HIT: bool>(
+    /// The packet query; `accel` must be flat or shallower than `wide::STACK_SIZE` (else the
+    /// stack's bound check panics).
+    pub(super) fn query<const ANY_HIT: bool>(
         accel: &Accel,
         shapes: &[Shape],
         rays: &RayPacket,
@@ -813,9 +758,9 @@ mod avx512 {
         let groups: [u32; 8] = std::array::from_fn(|octant| {
             let pick = |a: usize, bit: usize| {
                 if octant & bit != 0 {
-                    r.neg[a] as u32
+                    r.neg_bits[a] as u32
                 } else {
-                    !r.neg[a] as u32 & 0xffff
+                    !r.neg_bits[a] as u32 & 0xffff
                 }
             };
             st.live & pick(0, 4) & pick(1, 2) & pick(2, 1)
@@ -860,7 +805,7 @@ mod avx512 {
     /// The packet traversal for the lanes `lanes` from the root; children ordered for
     /// `octant` (None: each node's first lane's).
     #[inline(always)]
-    unsafe fn traverse<const ANY_HIT: bool>(
+    fn traverse<const ANY_HIT: bool>(
         accel: &Accel,
         shapes: &[Shape],
         r: &PacketRay,
@@ -894,7 +839,7 @@ mod avx512 {
                 continue;
             }
             let node = &nodes[index as usize];
-            let hits = children(node, r, lanes as u16, _mm512_load_ps(st.t.as_ptr()));
+            let hits = children(node, r, lanes as u16, F16::load(&st.t));
 
             // Leaf children first (as the single-ray traversal): against the packet where
             // enough lanes reached them, else each lane's primitives by its own test.
@@ -941,7 +886,9 @@ mod avx512 {
             // `wide::traverse`'s order), so they are pushed farthest first.
             let l = lanes.trailing_zeros();
             let octant = fixed_octant.unwrap_or(
-                (((r.neg[0] >> l) & 1) << 2 | ((r.neg[1] >> l) & 1) << 1 | ((r.neg[2] >> l) & 1))
+                (((r.neg_bits[0] >> l) & 1) << 2
+                    | ((r.neg_bits[1] >> l) & 1) << 1
+                    | ((r.neg_bits[2] >> l) & 1))
                     as usize,
             );
             for i in (0..8).rev() {
