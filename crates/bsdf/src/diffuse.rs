@@ -6,10 +6,12 @@
 //! </bsdf>
 //! ```
 //! One-sided, as Mitsuba's: zero unless both directions are above the shading surface.
-//! Sampled by the cosine-weighted hemisphere, so `weight` is the reflectance itself.
+//! Sampled by the cosine-weighted hemisphere, so `weight` is the reflectance itself. Written
+//! once over [`Real`] (`eval_pdf_r`, `sample_r`) for one path or a packet's lanes.
 
-use crate::{BsdfSample, LobeFlags, ShadingPoint, Texture};
+use crate::{BsdfSample, BsdfSampleR, LobeFlags, ShadingPoint, ShadingPointR, Texture};
 use glam::{Vec2, Vec3};
+use radia_math::real::{Mask, Real, Vector2, Vector3};
 use radia_math::{Spectrum, INV_PI};
 use radia_sampling::warp;
 
@@ -31,37 +33,69 @@ impl Diffuse {
 
     #[inline]
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
-        if wi.z <= 0.0 || wo.z <= 0.0 {
-            return Spectrum::ZERO;
-        }
-        self.reflectance.eval(sp) * (INV_PI * wo.z)
+        self.eval_pdf(sp, wi, wo).0
     }
 
     #[inline]
-    pub fn pdf(&self, _sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        if wi.z <= 0.0 || wo.z <= 0.0 {
-            return 0.0;
-        }
-        warp::cosine_hemisphere_pdf(wo)
+    pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
+        self.eval_pdf(sp, wi, wo).1
+    }
+
+    #[inline]
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let (f, pdf) = self.eval_pdf_r(&sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
     }
 
     #[inline]
     pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, _u1: f32, u2: Vec2) -> Option<BsdfSample> {
-        if wi.z <= 0.0 {
-            return None;
-        }
-        let wo = warp::square_to_cosine_hemisphere(u2);
-        let pdf = warp::cosine_hemisphere_pdf(wo);
-        if !(pdf > 0.0) {
-            return None;
-        }
-        Some(BsdfSample {
-            wo,
-            weight: self.reflectance.eval(sp),
-            pdf,
+        let s = self.sample_r(&sp.into(), wi.into(), u2.into());
+        s.valid.then(|| BsdfSample {
+            wo: s.wo.into(),
+            weight: s.weight.into(),
+            pdf: s.pdf,
             eta: 1.0,
             lobe: LobeFlags::DIFFUSE_REFLECTION,
         })
+    }
+
+    /// eval and pdf over any [`Real`]: zero unless both directions are above the surface.
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        let zero = R::zero();
+        let above = wi.z.greater(zero) & wo.z.greater(zero);
+        let f = self.reflectance.eval_r(sp) * (R::splat(INV_PI) * wo.z);
+        let pdf = warp::cosine_hemisphere_pdf_r(wo);
+        (
+            Vector3::select(above, f, Vector3::zero()),
+            R::select(above, pdf, zero),
+        )
+    }
+
+    /// sample over any [`Real`]: the cosine-weighted hemisphere, whose weight is the
+    /// reflectance.
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        let wo = warp::square_to_cosine_hemisphere_r(u2);
+        let pdf = warp::cosine_hemisphere_pdf_r(wo);
+        BsdfSampleR {
+            wo,
+            weight: self.reflectance.eval_r(sp),
+            pdf,
+            eta: R::one(),
+            valid: wi.z.greater(R::zero()) & pdf.greater(R::zero()),
+            delta: R::Mask::splat(false),
+        }
     }
 }
 

@@ -52,6 +52,7 @@
 //! `principled` and `principledthin` share, Mitsuba's `principledhelpers.h`).
 
 use glam::{Vec2, Vec3};
+use radia_math::real::{Real, Vector2, Vector3};
 use radia_math::Spectrum;
 
 mod aov;
@@ -196,6 +197,54 @@ impl ShadingPoint {
             n: Vec3::Z,
         }
     }
+}
+
+/// [`ShadingPoint`] over a [`Real`]: one point, or one per lane of a packet of paths.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadingPointR<R> {
+    pub uv: Vector2<R>,
+    pub dp_du: Vector3<R>,
+    pub dp_dv: Vector3<R>,
+    pub n: Vector3<R>,
+}
+
+impl<R: Real> ShadingPointR<R> {
+    /// Lane `k` as a one-path [`ShadingPoint`].
+    #[inline(always)]
+    pub fn lane(&self, k: usize) -> ShadingPoint {
+        ShadingPoint {
+            uv: self.uv.lane(k),
+            dp_du: self.dp_du.lane(k),
+            dp_dv: self.dp_dv.lane(k),
+            n: self.n.lane(k),
+        }
+    }
+}
+
+impl From<&ShadingPoint> for ShadingPointR<f32> {
+    #[inline(always)]
+    fn from(sp: &ShadingPoint) -> Self {
+        Self {
+            uv: sp.uv.into(),
+            dp_du: sp.dp_du.into(),
+            dp_dv: sp.dp_dv.into(),
+            n: sp.n.into(),
+        }
+    }
+}
+
+/// [`BsdfSample`] over a [`Real`]: what the path loop needs of the sampled lobe, as masks.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSampleR<R: Real> {
+    pub wo: Vector3<R>,
+    pub weight: Vector3<R>,
+    pub pdf: R,
+    pub eta: R,
+    /// Lanes with a sample (the one-path `Option` is `Some`); the other fields are
+    /// meaningless elsewhere.
+    pub valid: R::Mask,
+    /// Lanes whose sample came from a delta lobe.
+    pub delta: R::Mask,
 }
 
 /// The result of [`Bsdf::sample`].

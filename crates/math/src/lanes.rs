@@ -7,37 +7,17 @@
 //! without changing an image. Masks are `f32x16` lanes of all ones (true) or all zeros, as
 //! the `wide` crate's comparisons give them.
 
-use crate::Vec3;
-use std::ops::{Add, Mul, Neg, Sub};
+pub use crate::real::Vector3;
 pub use wide::f32x16;
 
 /// Lanes per operation.
 pub const WIDTH: usize = 16;
 
-/// Sixteen 3-vectors, one per lane, stored by component.
-#[derive(Clone, Copy, Debug)]
-pub struct Vec3s {
-    pub x: f32x16,
-    pub y: f32x16,
-    pub z: f32x16,
-}
+/// Sixteen 3-vectors, one per lane, stored by component: [`crate::real::Vector3`] over
+/// `f32x16`, whose operations are glam's lane by lane.
+pub type Vec3s = Vector3<f32x16>;
 
-impl Vec3s {
-    #[inline(always)]
-    pub fn splat(v: Vec3) -> Self {
-        Self {
-            x: f32x16::splat(v.x),
-            y: f32x16::splat(v.y),
-            z: f32x16::splat(v.z),
-        }
-    }
-
-    /// The same value `s` in all three components (glam's `Vec3::splat`, lane by lane).
-    #[inline(always)]
-    pub fn splat_lanes(s: f32x16) -> Self {
-        Self { x: s, y: s, z: s }
-    }
-
+impl Vector3<f32x16> {
     /// From the components of each lane, `rows[axis][lane]`.
     #[inline(always)]
     pub fn from_rows(rows: &[[f32; WIDTH]; 3]) -> Self {
@@ -52,76 +32,6 @@ impl Vec3s {
     #[inline(always)]
     pub fn to_rows(self) -> [[f32; WIDTH]; 3] {
         [self.x.to_array(), self.y.to_array(), self.z.to_array()]
-    }
-
-    /// glam's `dot`: (x·x') + (y·y') + (z·z').
-    #[inline(always)]
-    pub fn dot(self, rhs: Self) -> f32x16 {
-        self.x * rhs.x + self.y * rhs.y + self.z * rhs.z
-    }
-
-    /// glam's `cross`.
-    #[inline(always)]
-    pub fn cross(self, rhs: Self) -> Self {
-        Self {
-            x: self.y * rhs.z - rhs.y * self.z,
-            y: self.z * rhs.x - rhs.z * self.x,
-            z: self.x * rhs.y - rhs.x * self.y,
-        }
-    }
-
-    #[inline(always)]
-    pub fn length_squared(self) -> f32x16 {
-        self.dot(self)
-    }
-
-    /// glam's `normalize`: the vector times 1 / √(v·v) (not divided by the length).
-    #[inline(always)]
-    pub fn normalize(self) -> Self {
-        self * (f32x16::ONE / self.length_squared().sqrt())
-    }
-
-    /// Each component divided by `s` (glam's `Vec3 / f32`).
-    #[inline(always)]
-    pub fn div(self, s: f32x16) -> Self {
-        Self {
-            x: self.x / s,
-            y: self.y / s,
-            z: self.z / s,
-        }
-    }
-
-    #[inline(always)]
-    pub fn abs(self) -> Self {
-        Self {
-            x: self.x.abs(),
-            y: self.y.abs(),
-            z: self.z.abs(),
-        }
-    }
-
-    /// glam's `max_element`: `max(max(x, y), z)` with `max(a, b) = if a > b { a } else { b }`
-    /// (so a NaN picks the second operand, as there).
-    #[inline(always)]
-    pub fn max_element(self) -> f32x16 {
-        let max = |a: f32x16, b: f32x16| a.simd_gt(b).select(a, b);
-        max(max(self.x, self.y), self.z)
-    }
-
-    /// All three components finite, as a mask.
-    #[inline(always)]
-    pub fn is_finite(self) -> f32x16 {
-        self.x.is_finite() & self.y.is_finite() & self.z.is_finite()
-    }
-
-    /// Per lane `if_true` where `mask` is set, `if_false` elsewhere.
-    #[inline(always)]
-    pub fn select(mask: f32x16, if_true: Self, if_false: Self) -> Self {
-        Self {
-            x: mask.select(if_true.x, if_false.x),
-            y: mask.select(if_true.y, if_false.y),
-            z: mask.select(if_true.z, if_false.z),
-        }
     }
 }
 
@@ -213,114 +123,14 @@ pub fn copysign(a: f32x16, b: f32x16) -> f32x16 {
     (a & !sign) | (b & sign)
 }
 
-/// [`crate::trig::sin_cos_small`] in lanes (the same fused multiply-adds).
-#[inline(always)]
-pub fn sin_cos_small(a: f32x16) -> (f32x16, f32x16) {
-    let a2 = a * a;
-    let k = f32x16::splat;
-    let s = k(1.0 / 362_880.0)
-        .mul_add(a2, k(-1.0 / 5040.0))
-        .mul_add(a2, k(1.0 / 120.0))
-        .mul_add(a2, k(-1.0 / 6.0));
-    let sin = (s * a2).mul_add(a, a);
-    let c = k(-1.0 / 3_628_800.0)
-        .mul_add(a2, k(1.0 / 40_320.0))
-        .mul_add(a2, k(-1.0 / 720.0))
-        .mul_add(a2, k(1.0 / 24.0))
-        .mul_add(a2, k(-0.5));
-    let cos = c.mul_add(a2, f32x16::ONE);
-    (sin, cos)
-}
+/// [`crate::trig::sin_cos_small`] and [`crate::trig::sin_cos_turns`], written over
+/// [`crate::real::Real`], in lanes.
+pub use crate::trig::{sin_cos_small, sin_cos_turns};
 
-/// [`crate::trig::sin_cos_turns`] in lanes. Its `round` rounds halves away from zero where
-/// the vector instruction rounds them to even: the ties (4u an odd multiple of ½, exact)
-/// are moved back.
-#[inline(always)]
-pub fn sin_cos_turns(u: f32x16) -> (f32x16, f32x16) {
-    let x = f32x16::splat(4.0) * u;
-    let whole = x.trunc();
-    let tie = (x - whole).abs().simd_eq(f32x16::splat(0.5));
-    let q = tie.select(whole + copysign(f32x16::ONE, x), x.round_ties_even());
-    let (s, c) = sin_cos_small((x - q) * f32x16::splat(std::f32::consts::FRAC_PI_2));
-    // The quarter turn, q mod 4 in 0..3 (q is a small integer: exact).
-    let four = f32x16::splat(4.0);
-    let quarter = q - four * (q / four).floor();
-    let is = |v: f32| quarter.simd_eq(f32x16::splat(v));
-    let odd = is(1.0) | is(3.0);
-    let (a, b) = (odd.select(c, s), odd.select(s, c));
-    let sign = f32x16::splat(-0.0);
-    let sin_neg = quarter.simd_ge(f32x16::splat(2.0));
-    let cos_neg = is(1.0) | is(2.0);
-    (a ^ (sin_neg & sign), b ^ (cos_neg & sign))
-}
-
-/// [`crate::coordinate_system`] in lanes: the two tangents of a frame around `n`.
+/// [`crate::coordinate_system`] in lanes.
 #[inline(always)]
 pub fn coordinate_system(n: Vec3s) -> (Vec3s, Vec3s) {
-    let sign = copysign(f32x16::ONE, n.z);
-    let a = f32x16::splat(-1.0) / (sign + n.z);
-    let b = n.x * n.y * a;
-    (
-        Vec3s {
-            x: n.x * n.x * a * sign + f32x16::ONE,
-            y: b * sign,
-            z: -n.x * sign,
-        },
-        Vec3s {
-            x: b,
-            y: sign + n.y * n.y * a,
-            z: -n.y,
-        },
-    )
-}
-
-impl Add for Vec3s {
-    type Output = Self;
-    #[inline(always)]
-    fn add(self, rhs: Self) -> Self {
-        Self {
-            x: self.x + rhs.x,
-            y: self.y + rhs.y,
-            z: self.z + rhs.z,
-        }
-    }
-}
-
-impl Sub for Vec3s {
-    type Output = Self;
-    #[inline(always)]
-    fn sub(self, rhs: Self) -> Self {
-        Self {
-            x: self.x - rhs.x,
-            y: self.y - rhs.y,
-            z: self.z - rhs.z,
-        }
-    }
-}
-
-impl Neg for Vec3s {
-    type Output = Self;
-    #[inline(always)]
-    fn neg(self) -> Self {
-        Self {
-            x: -self.x,
-            y: -self.y,
-            z: -self.z,
-        }
-    }
-}
-
-/// Each component times the lane's scalar (glam's `Vec3 * f32`).
-impl Mul<f32x16> for Vec3s {
-    type Output = Self;
-    #[inline(always)]
-    fn mul(self, s: f32x16) -> Self {
-        Self {
-            x: self.x * s,
-            y: self.y * s,
-            z: self.z * s,
-        }
-    }
+    crate::coordinate_system_r(n)
 }
 
 #[cfg(test)]
@@ -386,6 +196,7 @@ mod tests {
     }
     use super::*;
     use crate::trig;
+    use crate::Vec3;
 
     /// Sixteen vectors of assorted scales and signs, with a zero and a huge one.
     fn samples(seed: u32) -> [Vec3; WIDTH] {

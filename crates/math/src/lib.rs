@@ -8,6 +8,7 @@ pub mod float;
 mod frame;
 pub mod lanes;
 mod ray;
+pub mod real;
 pub mod trig;
 
 pub use frame::Frame;
@@ -60,12 +61,19 @@ pub fn safe_acos(x: f32) -> f32 {
 /// `coordinate_system`).
 #[inline]
 pub fn coordinate_system(n: Vec3) -> (Vec3, Vec3) {
-    let sign = 1.0f32.copysign(n.z);
-    let a = -1.0 / (sign + n.z);
+    let (s, t) = coordinate_system_r(n.into());
+    (s.into(), t.into())
+}
+
+/// [`coordinate_system`] over any [`real::Real`].
+#[inline(always)]
+pub fn coordinate_system_r<R: real::Real>(n: real::Vector3<R>) -> (real::Vector3<R>, real::Vector3<R>) {
+    let sign = R::one().copysign(n.z);
+    let a = R::splat(-1.0) / (sign + n.z);
     let b = n.x * n.y * a;
     (
-        Vec3::new(n.x * n.x * a * sign + 1.0, b * sign, -n.x * sign),
-        Vec3::new(b, sign + n.y * n.y * a, -n.y),
+        real::Vector3::new(n.x * n.x * a * sign + R::one(), b * sign, -n.x * sign),
+        real::Vector3::new(b, sign + n.y * n.y * a, -n.y),
     )
 }
 

@@ -8,6 +8,7 @@
 //!
 //! Accuracy (tested below against `f64`): at most 3 units in the last place of the result.
 
+use crate::real::Real;
 use std::f32::consts::{FRAC_PI_2, PI};
 
 /// atan(t) / t = Q(t²) on t ∈ [0, 1]: a degree-8 polynomial fitted (weighted least squares
@@ -74,41 +75,45 @@ pub fn asin(x: f32) -> f32 {
 /// errors there (below 2·10⁻⁹ and 3·10⁻¹⁰) are far under one f32 ulp. glibc's `sincosf`
 /// does a range reduction and a dispatch on the argument's size first: in a diffuse scene it
 /// was 2% of the render time, through the cosine-weighted hemisphere's concentric disk.
+/// Written over [`Real`]: one path's value or sixteen, the same fused multiply-adds.
 #[inline(always)]
-pub fn sin_cos_small(a: f32) -> (f32, f32) {
+pub fn sin_cos_small<R: Real>(a: R) -> (R, R) {
+    let k = R::splat;
     let a2 = a * a;
-    let s = (1.0 / 362_880.0f32)
-        .mul_add(a2, -1.0 / 5040.0)
-        .mul_add(a2, 1.0 / 120.0)
-        .mul_add(a2, -1.0 / 6.0);
+    let s = k(1.0 / 362_880.0)
+        .mul_add(a2, k(-1.0 / 5040.0))
+        .mul_add(a2, k(1.0 / 120.0))
+        .mul_add(a2, k(-1.0 / 6.0));
     let sin = (s * a2).mul_add(a, a);
-    let c = (-1.0 / 3_628_800.0f32)
-        .mul_add(a2, 1.0 / 40_320.0)
-        .mul_add(a2, -1.0 / 720.0)
-        .mul_add(a2, 1.0 / 24.0)
-        .mul_add(a2, -0.5);
-    let cos = c.mul_add(a2, 1.0);
+    let c = k(-1.0 / 3_628_800.0)
+        .mul_add(a2, k(1.0 / 40_320.0))
+        .mul_add(a2, k(-1.0 / 720.0))
+        .mul_add(a2, k(1.0 / 24.0))
+        .mul_add(a2, k(-0.5));
+    let cos = c.mul_add(a2, R::one());
     (sin, cos)
 }
 
 /// (sin 2πu, cos 2πu): the angle given in turns, as the warps have it (u ∈ [0, 1)). The
 /// nearest quarter turn is taken off exactly (4u and its distance to an integer are exact in
 /// f32), what remains is within ±π/4 for [`sin_cos_small`], and the quarter turns rotate it
-/// back. Finite `u` only.
+/// back, as a swap and two sign flips rather than a four-way branch on a random quadrant.
+/// Finite `u` only.
 #[inline(always)]
-pub fn sin_cos_turns(u: f32) -> (f32, f32) {
-    let q = (4.0 * u).round();
-    let (s, c) = sin_cos_small((4.0 * u - q) * FRAC_PI_2);
-    // Quarter turns 0..3: (s, c), (c, −s), (−s, −c), (−c, s), as a swap and two sign flips
-    // rather than a four-way branch on a random quadrant.
-    let quarter = (q as i64).rem_euclid(4) as u32;
-    let (a, b) = std::hint::select_unpredictable(quarter & 1 != 0, (c, s), (s, c));
-    let sin_sign = (quarter >> 1) << 31;
-    let cos_sign = ((quarter ^ (quarter >> 1)) & 1) << 31;
-    (
-        f32::from_bits(a.to_bits() ^ sin_sign),
-        f32::from_bits(b.to_bits() ^ cos_sign),
-    )
+pub fn sin_cos_turns<R: Real>(u: R) -> (R, R) {
+    let x = R::splat(4.0) * u;
+    let q = x.round();
+    let (s, c) = sin_cos_small((x - q) * R::splat(FRAC_PI_2));
+    // The quarter turn, q mod 4 in 0..3 (q is a small integer: exact). Quarter turns 0..3
+    // give (s, c), (c, −s), (−s, −c), (−c, s).
+    let four = R::splat(4.0);
+    let quarter = q - four * (q / four).floor();
+    let is = |v: f32| quarter.equals(R::splat(v));
+    let odd = is(1.0) | is(3.0);
+    let (a, b) = (R::select(odd, c, s), R::select(odd, s, c));
+    let sin_neg = quarter.greater_eq(R::splat(2.0));
+    let cos_neg = is(1.0) | is(2.0);
+    (a.negate_where(sin_neg), b.negate_where(cos_neg))
 }
 
 #[cfg(test)]

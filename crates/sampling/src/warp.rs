@@ -2,28 +2,43 @@
 //! Conventions as Mitsuba's `include/mitsuba/core/warp.h`: local z is up, pdfs are per unit
 //! area (square, disk, triangle) or per unit solid angle (directions).
 
+//!
+//! The warps the packet loop runs over sixteen paths are written once over
+//! [`radia_math::real::Real`] (the `_r` functions); the glam-typed functions of the same name
+//! are their one-path instances.
+
 use glam::{Vec2, Vec3};
+use radia_math::real::{Real, Vector2, Vector3};
 use radia_math::trig::{sin_cos_small, sin_cos_turns};
 use radia_math::{safe_sqrt, INV_FOUR_PI, INV_PI, INV_TWO_PI, PI};
-use std::hint::select_unpredictable;
 
 /// Concentric (Shirley-Chiu) map to the unit disk; pdf 1/π.
 #[inline]
 pub fn square_to_uniform_disk_concentric(u: Vec2) -> Vec2 {
-    let x = 2.0 * u.x - 1.0;
-    let y = 2.0 * u.y - 1.0;
-    if x == 0.0 && y == 0.0 {
-        return Vec2::ZERO;
-    }
+    square_to_uniform_disk_concentric_r(u.into()).into()
+}
+
+/// [`square_to_uniform_disk_concentric`] over any [`Real`].
+#[inline(always)]
+pub fn square_to_uniform_disk_concentric_r<R: Real>(u: Vector2<R>) -> Vector2<R> {
+    let (one, two) = (R::one(), R::splat(2.0));
+    let x = two * u.x - one;
+    let y = two * u.y - one;
     // φ = (π/4)(y/x), or π/2 − (π/4)(x/y) whose sine and cosine are the cosine and sine
     // of (π/4)(x/y): either way an angle within ±π/4. Written as selects, not branches:
     // which case a sample falls in is a coin toss, and the mispredicted branch was a quarter
     // of the diffuse model's sampling time.
-    let steep = !(x * x > y * y);
-    let (num, r) = select_unpredictable(steep, (x, y), (y, x));
-    let (s, c) = sin_cos_small((PI / 4.0) * (num / r));
-    let (along_x, along_y) = select_unpredictable(steep, (s, c), (c, s));
-    Vec2::new(r * along_x, r * along_y)
+    let steep = !(x * x).greater(y * y);
+    let (num, r) = (R::select(steep, x, y), R::select(steep, y, x));
+    let (s, c) = sin_cos_small(R::splat(PI / 4.0) * (num / r));
+    let (along_x, along_y) = (R::select(steep, s, c), R::select(steep, c, s));
+    // The centre (0/0 above) maps to itself.
+    let centre = x.equals(R::zero()) & y.equals(R::zero());
+    Vector2::select(
+        centre,
+        Vector2::new(R::zero(), R::zero()),
+        Vector2::new(r * along_x, r * along_y),
+    )
 }
 
 #[inline]
@@ -34,14 +49,26 @@ pub fn uniform_disk_pdf() -> f32 {
 /// Cosine-weighted hemisphere around +z (Malley's method); pdf cos θ / π.
 #[inline]
 pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3 {
-    let p = square_to_uniform_disk_concentric(u);
-    let z = safe_sqrt(1.0 - p.length_squared());
-    Vec3::new(p.x, p.y, z)
+    square_to_cosine_hemisphere_r(u.into()).into()
+}
+
+/// [`square_to_cosine_hemisphere`] over any [`Real`].
+#[inline(always)]
+pub fn square_to_cosine_hemisphere_r<R: Real>(u: Vector2<R>) -> Vector3<R> {
+    let p = square_to_uniform_disk_concentric_r(u);
+    let z = (R::one() - p.length_squared()).safe_sqrt();
+    Vector3::new(p.x, p.y, z)
 }
 
 #[inline]
 pub fn cosine_hemisphere_pdf(v: Vec3) -> f32 {
-    INV_PI * v.z.max(0.0)
+    cosine_hemisphere_pdf_r(v.into())
+}
+
+/// [`cosine_hemisphere_pdf`] over any [`Real`].
+#[inline(always)]
+pub fn cosine_hemisphere_pdf_r<R: Real>(v: Vector3<R>) -> R {
+    R::splat(INV_PI) * v.z.max(R::zero())
 }
 
 /// Uniform hemisphere around +z; pdf 1/2π.

@@ -21,7 +21,7 @@ pub use emitter::{Emitter, EmitterSample};
 pub use lights::{LightContext, LightSamplerKind, Lights};
 pub use shadow_lanes::ShadowLanes;
 use shape::{DiskHits, MeshHits, ShapeKind, SphereHits};
-pub use shape::{Shape, SurfaceInteraction};
+pub use shape::{Shape, SurfaceInteraction, SurfaceLanes};
 
 use glam::Vec3;
 use radia_bsdf::{Bsdf, ShadingPoint};
@@ -150,13 +150,24 @@ impl Scene {
     /// Per active lane of `rays` the closest surface (None where the ray escapes or the lane
     /// is inactive): what [`Scene::intersect`] gives for that lane's ray (when two surfaces
     /// are hit at exactly the same distance, possibly the other one;
-    /// [`Accel::intersect_packet`]).
+    /// [`Accel::intersect_packet`]). [`Scene::intersect_packet_lanes`], one lane at a time.
     pub fn intersect_packet(
         &self,
         rays: &RayPacket,
         out: &mut [Option<SurfaceInteraction>; PACKET_LANES],
     ) {
+        let mut lanes = SurfaceLanes::new();
+        self.intersect_packet_lanes(rays, &mut lanes);
+        for (k, si) in out.iter_mut().enumerate() {
+            *si = lanes.get(k);
+        }
+    }
+
+    /// [`Scene::intersect_packet`] into lanes: `out.hit` is the lanes with a hit, and each of
+    /// their fields holds what [`Scene::intersect`] gives for that lane's ray.
+    pub fn intersect_packet_lanes(&self, rays: &RayPacket, out: &mut SurfaceLanes) {
         let hits = self.accel.intersect_packet(&self.shapes, rays);
+        out.hit = 0;
         // Hits on mesh triangles, spheres and disks are gathered and their interactions
         // computed together (`shape::MeshHits`, `SphereHits`, `DiskHits`); hits on instances,
         // and the lanes those hand back, one by one.
@@ -164,11 +175,10 @@ impl Scene {
         let mut spheres = SphereHits::new();
         let mut disks = DiskHits::new();
         let mut one_by_one = 0u32;
-        for (lane, si) in out.iter_mut().enumerate() {
-            *si = None;
-            if hits.hit & (1 << lane) == 0 {
-                continue;
-            }
+        let mut todo = hits.hit;
+        while todo != 0 {
+            let lane = todo.trailing_zeros() as usize;
+            todo &= todo - 1;
             let prim = hits.prim[lane] as usize;
             let [shape, face] = self.accel.owner(prim);
             match &self.shapes[shape as usize].kind {
@@ -187,7 +197,8 @@ impl Scene {
             let lane = one_by_one.trailing_zeros() as usize;
             one_by_one &= one_by_one - 1;
             let hit = hits.hit(lane).expect("a lane with a hit");
-            out[lane] = Some(self.interaction(&hit, &rays.ray(lane)));
+            let si = self.interaction(&hit, &rays.ray(lane));
+            out.set(lane, Some(&si));
         }
     }
 

@@ -6,6 +6,7 @@ mod lanes;
 mod light_lanes;
 
 pub(crate) use lanes::{DiskHits, MeshHits, SphereHits};
+pub use lanes::SurfaceLanes;
 pub(crate) use light_lanes::{uniform_sphere_directions, LightSpheres, LightTriangles};
 
 use crate::accel::{Hit, Primitive};

@@ -16,8 +16,9 @@
 //! and scalar ones such as roughness or a blend weight ([`Texture::eval_1`], Mitsuba's
 //! `eval_1`: the luminance of a colour texture).
 
-use crate::ShadingPoint;
+use crate::{ShadingPoint, ShadingPointR};
 use glam::Vec2;
+use radia_math::real::{Real, Vector3};
 use radia_math::Spectrum;
 use std::sync::Arc;
 
@@ -56,6 +57,16 @@ impl Texture {
             Texture::Constant(c) => *c,
             Texture::Bitmap(b) => b.eval(sp.uv),
             Texture::Checkerboard(c) => c.eval(sp),
+        }
+    }
+
+    /// [`Texture::eval`] over any [`Real`]: a constant is the same in every lane, an image
+    /// or checkerboard is looked up lane by lane.
+    #[inline(always)]
+    pub fn eval_r<R: Real>(&self, sp: &ShadingPointR<R>) -> Vector3<R> {
+        match self {
+            Texture::Constant(c) => Vector3::splat(*c),
+            _ => Vector3::from_fn(|k| self.eval(&sp.lane(k))),
         }
     }
 

@@ -18,10 +18,11 @@
 use crate::description::Mesh;
 use crate::shape::SurfaceInteraction;
 use crate::{PacketHits, RayPacket, PACKET_LANES};
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use radia_math::float::gamma;
 use radia_math::lanes::{self, f32x16, mask, Mat3s, Vec3s, WIDTH};
-use radia_math::{Frame, INV_TWO_PI, PI};
+use radia_math::real::{FrameR, Vector2};
+use radia_math::{INV_TWO_PI, PI};
 
 const _: () = assert!(WIDTH == PACKET_LANES);
 
@@ -130,7 +131,7 @@ impl MeshHits {
         &self,
         hits: &PacketHits,
         rays: &RayPacket,
-        out: &mut [Option<SurfaceInteraction>; PACKET_LANES],
+        out: &mut SurfaceLanes,
     ) -> u32 {
         if self.lanes == 0 {
             return 0;
@@ -255,7 +256,7 @@ impl SphereHits {
         &self,
         hits: &PacketHits,
         rays: &RayPacket,
-        out: &mut [Option<SurfaceInteraction>; PACKET_LANES],
+        out: &mut SurfaceLanes,
     ) -> u32 {
         if self.lanes == 0 {
             return 0;
@@ -384,7 +385,7 @@ impl DiskHits {
         &self,
         hits: &PacketHits,
         rays: &RayPacket,
-        out: &mut [Option<SurfaceInteraction>; PACKET_LANES],
+        out: &mut SurfaceLanes,
     ) -> u32 {
         if self.lanes == 0 {
             return 0;
@@ -474,7 +475,7 @@ impl Surface {
         rays: &RayPacket,
         shape: &[u32; WIDTH],
         face: &[u32; WIDTH],
-        out: &mut [Option<SurfaceInteraction>; PACKET_LANES],
+        out: &mut SurfaceLanes,
     ) -> u32 {
         let (sh_n, dpdu) = (self.sh_n, self.dpdu);
         // The shading frame: ∂p/∂u made orthogonal to the shading normal
@@ -487,38 +488,147 @@ impl Surface {
 
         // The incoming direction in the shading frame.
         let back = -Vec3s::from_rows(&rays.d);
-        let wi = (back.dot(s), back.dot(t_axis), back.dot(sh_n));
+        let wi = Vec3s {
+            x: back.dot(s),
+            y: back.dot(t_axis),
+            z: back.dot(sh_n),
+        };
 
         let scalar = lanes & !frame_ok.to_bitmask();
-        let (p, p_error, n) = (self.p.to_rows(), self.p_error.to_rows(), self.n.to_rows());
-        let (fs, ft, fn_) = (s.to_rows(), t_axis.to_rows(), sh_n.to_rows());
-        let (dpdu, dpdv) = (self.dpdu.to_rows(), self.dpdv.to_rows());
-        let (uv_u, uv_v) = (self.uv.0.to_array(), self.uv.1.to_array());
-        let wi = (wi.0.to_array(), wi.1.to_array(), wi.2.to_array());
-        let at = |rows: &Rows, k: usize| Vec3::new(rows[0][k], rows[1][k], rows[2][k]);
-        let mut done = lanes & !scalar;
-        while done != 0 {
-            let k = done.trailing_zeros() as usize;
-            done &= done - 1;
-            out[k] = Some(SurfaceInteraction {
-                p: at(&p, k),
-                p_error: at(&p_error, k),
-                t: hits.t[k],
-                n: at(&n, k),
-                frame: Frame {
-                    s: at(&fs, k),
-                    t: at(&ft, k),
-                    n: at(&fn_, k),
-                },
-                uv: Vec2::new(uv_u[k], uv_v[k]),
-                dp_du: at(&dpdu, k),
-                dp_dv: at(&dpdv, k),
-                shape: shape[k],
-                instance: None,
-                face: face[k],
-                wi: Vec3::new(wi.0[k], wi.1[k], wi.2[k]),
-            });
+        let done = lanes & !scalar;
+        if done == 0 {
+            return scalar;
+        }
+        let m = mask(done);
+        let blend = |new: Vec3s, old: &mut Vec3s| *old = Vec3s::select(m, new, *old);
+        blend(self.p, &mut out.p);
+        blend(self.p_error, &mut out.p_error);
+        blend(self.n, &mut out.n);
+        blend(s, &mut out.frame.s);
+        blend(t_axis, &mut out.frame.t);
+        blend(sh_n, &mut out.frame.n);
+        blend(self.dpdu, &mut out.dp_du);
+        blend(self.dpdv, &mut out.dp_dv);
+        blend(wi, &mut out.wi);
+        out.uv.x = m.select(self.uv.0, out.uv.x);
+        out.uv.y = m.select(self.uv.1, out.uv.y);
+        out.t = m.select(f32x16::new(hits.t), out.t);
+        out.hit |= done;
+        for k in lanes_of(done) {
+            out.shape[k] = shape[k];
+            out.face[k] = face[k];
+            out.instance[k] = None;
         }
         scalar
+    }
+}
+
+/// The lanes whose bits are set in `bits`, lowest first.
+#[inline(always)]
+fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (bits != 0).then(|| {
+            let k = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            k
+        })
+    })
+}
+
+/// The surface interactions of a packet's closest hits, by component over the lanes: what
+/// [`SurfaceInteraction`] holds for one hit, sixteen at a time, for the steps of the packet
+/// loop that run over lanes. Lanes outside `hit` hold stale values.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceLanes {
+    /// Lanes whose ray hit a surface.
+    pub hit: u32,
+    pub p: Vec3s,
+    pub p_error: Vec3s,
+    pub t: f32x16,
+    pub n: Vec3s,
+    pub frame: FrameR<f32x16>,
+    pub uv: Vector2<f32x16>,
+    pub dp_du: Vec3s,
+    pub dp_dv: Vec3s,
+    pub wi: Vec3s,
+    pub shape: [u32; WIDTH],
+    pub instance: [Option<u32>; WIDTH],
+    pub face: [u32; WIDTH],
+}
+
+impl Default for SurfaceLanes {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl SurfaceLanes {
+    pub fn new() -> Self {
+        let zero = Vec3s::splat(Vec3::ZERO);
+        Self {
+            hit: 0,
+            p: zero,
+            p_error: zero,
+            t: f32x16::ZERO,
+            n: zero,
+            frame: FrameR {
+                s: zero,
+                t: zero,
+                n: zero,
+            },
+            uv: Vector2 {
+                x: f32x16::ZERO,
+                y: f32x16::ZERO,
+            },
+            dp_du: zero,
+            dp_dv: zero,
+            wi: zero,
+            shape: [0; WIDTH],
+            instance: [None; WIDTH],
+            face: [0; WIDTH],
+        }
+    }
+
+    /// Lane `k`'s interaction, if its ray hit something.
+    #[inline(always)]
+    pub fn get(&self, k: usize) -> Option<SurfaceInteraction> {
+        use radia_math::real::Real;
+        (self.hit & (1 << k) != 0).then(|| SurfaceInteraction {
+            p: self.p.lane(k),
+            p_error: self.p_error.lane(k),
+            t: self.t.lane(k),
+            n: self.n.lane(k),
+            frame: self.frame.lane(k),
+            uv: self.uv.lane(k),
+            dp_du: self.dp_du.lane(k),
+            dp_dv: self.dp_dv.lane(k),
+            shape: self.shape[k],
+            instance: self.instance[k],
+            face: self.face[k],
+            wi: self.wi.lane(k),
+        })
+    }
+
+    /// Makes lane `k` hold `si` (or no hit).
+    #[inline(always)]
+    pub fn set(&mut self, k: usize, si: Option<&SurfaceInteraction>) {
+        use radia_math::real::Real;
+        let Some(si) = si else {
+            self.hit &= !(1 << k);
+            return;
+        };
+        self.hit |= 1 << k;
+        self.p.set_lane(k, si.p);
+        self.p_error.set_lane(k, si.p_error);
+        self.t.set_lane(k, si.t);
+        self.n.set_lane(k, si.n);
+        self.frame.set_lane(k, &si.frame);
+        self.uv.set_lane(k, si.uv);
+        self.dp_du.set_lane(k, si.dp_du);
+        self.dp_dv.set_lane(k, si.dp_dv);
+        self.wi.set_lane(k, si.wi);
+        self.shape[k] = si.shape;
+        self.instance[k] = si.instance;
+        self.face[k] = si.face;
     }
 }
