@@ -408,10 +408,52 @@ impl Bsdf {
     #[inline]
     pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
         match self {
+            Bsdf::Diffuse(m) => m.eval_pdf(sp, wi, wo),
             // Models whose value and density share costly steps compute them together.
             Bsdf::Principled(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::RoughConductor(m) => m.eval_pdf(sp, wi, wo),
             _ => (self.eval(sp, wi, wo), self.pdf(sp, wi, wo)),
+        }
+    }
+}
+
+/// The models written over [`Real`] as well, which the packet loop runs over sixteen paths at
+/// once (`radia_render::wavefront`); for one path they give what [`Bsdf::eval_pdf`] and
+/// [`Bsdf::sample`] give, bit for bit (the one-path functions call them).
+impl Bsdf {
+    /// Whether [`Bsdf::eval_pdf_r`] and [`Bsdf::sample_r`] have this model (`None` from
+    /// them otherwise: the packet loop runs those paths one at a time).
+    #[inline]
+    pub fn has_r(&self) -> bool {
+        matches!(self, Bsdf::Diffuse(_))
+    }
+
+    /// [`Bsdf::eval_pdf`] over any [`Real`] (lanes for which the model says 0 give 0).
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> Option<(Vector3<R>, R)> {
+        match self {
+            Bsdf::Diffuse(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            _ => None,
+        }
+    }
+
+    /// [`Bsdf::sample`] over any [`Real`].
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        _u1: R,
+        u2: Vector2<R>,
+    ) -> Option<BsdfSampleR<R>> {
+        match self {
+            Bsdf::Diffuse(m) => Some(m.sample_r(sp, wi, u2)),
+            _ => None,
         }
     }
 }

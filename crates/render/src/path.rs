@@ -52,26 +52,23 @@ pub struct PathStats {
 #[derive(Clone, Copy, Debug)]
 pub struct PathIntegrator {
     /// Maximum number of path segments (u32::MAX when unbounded).
-    max_depth: u32,
-    rr_depth: u32,
-    hide_emitters: bool,
+    pub(crate) max_depth: u32,
+    pub(crate) rr_depth: u32,
+    pub(crate) hide_emitters: bool,
     /// Next-event estimation has something to sample (`scene.lights`, which also decides
     /// which light: radia's light BVH by default, Mitsuba's uniform choice on request).
-    has_lights: bool,
-    /// The packet loop samples its lanes' lights together
-    /// ([`Scene::samples_lights_in_lanes`]).
-    batch_lights: bool,
+    pub(crate) has_lights: bool,
 }
 
 /// Where the previous bounce left from, for MIS on emitters hit by BSDF sampling (null
 /// crossings are not bounces here).
 #[derive(Clone, Copy)]
-struct PrevVertex {
-    p: Vec3,
+pub(crate) struct PrevVertex {
+    pub p: Vec3,
     /// Shading normal there: the light BVH's choice depends on it.
-    n: Vec3,
-    bsdf_pdf: f32,
-    bsdf_delta: bool,
+    pub n: Vec3,
+    pub bsdf_pdf: f32,
+    pub bsdf_delta: bool,
 }
 
 impl PathIntegrator {
@@ -86,7 +83,6 @@ impl PathIntegrator {
             rr_depth: cfg.rr_depth.max(0) as u32,
             hide_emitters: cfg.hide_emitters,
             has_lights: !scene.lights.is_empty(),
-            batch_lights: scene.samples_lights_in_lanes(),
         }
     }
 
@@ -113,8 +109,6 @@ impl PathIntegrator {
                 scene,
                 &mut path,
                 hit.as_ref(),
-                None,
-                None,
                 sampler,
                 stats,
                 &mut shadow,
@@ -150,54 +144,15 @@ impl PathIntegrator {
         })
     }
 
-    /// Whether the packet loop samples its lanes' lights together
-    /// ([`Scene::samples_lights_in_lanes`]; [`PathIntegrator::light_query`] says `None`
-    /// otherwise).
-    #[inline(always)]
-    pub(crate) fn batches_lights(&self) -> bool {
-        self.batch_lights
-    }
-
-    /// The light sample's values of the next-event estimate that [`PathIntegrator::bounce`]
-    /// will make at `hit`: where from, the choice value and the position values. `None` when
-    /// the bounce makes no estimate there, for camera rays under `hide_emitters` (whose
-    /// hit the bounce may still replace: those sample their light in the bounce), and in
-    /// scenes whose lights are not all sampled in lanes (the bounce samples them). The
-    /// packet loop samples the lights of all its lanes at once from these
-    /// ([`Scene::sample_emitter_directions`]) before their bounces.
-    #[inline]
-    pub(crate) fn light_query<S: Sampler>(
-        &self,
-        scene: &Scene,
-        path: &PathState,
-        hit: Option<&SurfaceInteraction>,
-        sampler: &mut SampleStream<'_, S>,
-    ) -> Option<(LightContext, f32, Vec2)> {
-        let si = hit?;
-        if !self.batch_lights
-            || (self.hide_emitters && path.primary)
-            || path.depth + 1 >= self.max_depth
-            || !self.estimates(scene.bsdf(si))
-        {
-            return None;
-        }
-        let (u_sel, u) = self.light_values(scene, path.depth, sampler);
-        let ctx = LightContext {
-            p: si.p,
-            n: si.frame.n,
-        };
-        Some((ctx, u_sel, u))
-    }
-
     /// Whether a bounce that scatters by `bsdf` makes a next-event estimate.
     #[inline(always)]
-    fn estimates(&self, bsdf: &radia_bsdf::Bsdf) -> bool {
+    pub(crate) fn estimates(&self, bsdf: &radia_bsdf::Bsdf) -> bool {
         bsdf.flags().has_smooth() && self.has_lights
     }
 
     /// The light sample's choice and position values at bounce `depth`.
     #[inline(always)]
-    fn light_values<S: Sampler>(
+    pub(crate) fn light_values<S: Sampler>(
         &self,
         scene: &Scene,
         depth: u32,
@@ -219,11 +174,8 @@ impl PathIntegrator {
     /// [`PendingShadow::resolve`]d before the next step), the BSDF sample that gives the next
     /// ray, and Russian roulette. Returns false when the path ends here.
     ///
-    /// `light` is the estimate's light sample when it was made already, from the values of
-    /// [`PathIntegrator::light_query`] (`Some(None)`: the light sample failed); `None` to
-    /// make it here. `escape` is the environment's radiance and density along `path.ray`
-    /// when they were looked up already (the packet loop does so for the rays that escape),
-    /// `None` to look them up here.
+    /// The packet loop (`crate::wavefront`) runs these steps over its lanes, and this
+    /// function for the lanes it does not cover.
     ///
     /// (The estimate is written in place rather than returned: the packet loop copied a
     /// returned one into its lane through the stack, and that copy stalled on store
@@ -234,8 +186,6 @@ impl PathIntegrator {
         scene: &Scene,
         path: &mut PathState,
         hit: Option<&SurfaceInteraction>,
-        light: Option<&Option<EmitterSample>>,
-        escape: Option<&(Spectrum, f32)>,
         sampler: &mut SampleStream<'_, S>,
         stats: &mut PathStats,
         shadow: &mut Option<PendingShadow>,
@@ -255,10 +205,7 @@ impl PathIntegrator {
             if let Some(env) = scene.environment {
                 if !(self.hide_emitters && path.primary) {
                     let emitter = &scene.emitters[env as usize];
-                    let (le, pdf_dir) = match escape {
-                        Some(&found) => found,
-                        None => emitter.eval_environment_pdf(path.ray.d),
-                    };
+                    let (le, pdf_dir) = emitter.eval_environment_pdf(path.ray.d);
                     let w = self.mis_emitter_hit(&path.prev, |ctx| {
                         scene.pdf_environment(ctx, env, pdf_dir)
                     });
@@ -292,23 +239,15 @@ impl PathIntegrator {
         if self.estimates(bsdf) {
             // Shadow rays may cross null surfaces, each a bounce (see the module docs).
             let crossings = self.max_depth.saturating_sub(depth + 2);
-            let made;
-            let es = match light {
-                Some(es) => es.as_ref(),
-                None => {
-                    let (u_sel, u) = self.light_values(scene, depth, sampler);
-                    let ctx = LightContext {
-                        p: si.p,
-                        n: si.frame.n,
-                    };
-                    // Read in place: moving the record out of the Option just after the
-                    // callee wrote it field by field stalls on store forwarding (measured:
-                    // 6% of the packet loop).
-                    made = scene.sample_emitter_direction(&ctx, u_sel, u);
-                    made.as_ref()
-                }
+            let (u_sel, u) = self.light_values(scene, depth, sampler);
+            let ctx = LightContext {
+                p: si.p,
+                n: si.frame.n,
             };
-            let found = self.estimate(si, &sp, bsdf, crossings, es, path.beta, shadow);
+            // Read in place: moving the record out of the Option just after the callee wrote
+            // it field by field stalls on store forwarding (measured: 6% of the packet loop).
+            let made = scene.sample_emitter_direction(&ctx, u_sel, u);
+            let found = self.estimate(si, &sp, bsdf, crossings, made.as_ref(), path.beta, shadow);
             match found {
                 Some(()) => stats.rays += 1,
                 // Nothing to trace: the estimate is 0, added as the full estimate would be
@@ -368,7 +307,7 @@ impl PathIntegrator {
     /// emitter's density from there, which includes the probability that light selection
     /// picks it (not asked for after a delta lobe, which emitter sampling cannot follow).
     #[inline]
-    fn mis_emitter_hit(&self, prev: &PrevVertex, pdf_em: impl FnOnce(&LightContext) -> f32) -> f32 {
+    pub(crate) fn mis_emitter_hit(&self, prev: &PrevVertex, pdf_em: impl FnOnce(&LightContext) -> f32) -> f32 {
         if prev.bsdf_delta {
             return 1.0;
         }
@@ -428,35 +367,12 @@ pub(crate) struct PathState {
     pub ray: Ray,
     /// Radiance gathered so far.
     pub result: Spectrum,
-    beta: Spectrum,
+    pub beta: Spectrum,
     /// Product of the relative IORs crossed (for Russian roulette).
-    eta: f32,
-    depth: u32,
-    primary: bool,
-    prev: PrevVertex,
-}
-
-impl PathState {
-    /// A placeholder for a lane whose camera ray is still to be made
-    /// ([`PathIntegrator::start`] replaces it).
-    pub(crate) const UNSTARTED: Self = Self {
-        ray: Ray {
-            o: Vec3::ZERO,
-            d: Vec3::Z,
-            t_max: 0.0,
-        },
-        result: Spectrum::ZERO,
-        beta: Spectrum::ZERO,
-        eta: 1.0,
-        depth: 0,
-        primary: true,
-        prev: PrevVertex {
-            p: Vec3::ZERO,
-            n: Vec3::ZERO,
-            bsdf_pdf: 1.0,
-            bsdf_delta: true,
-        },
-    };
+    pub eta: f32,
+    pub depth: u32,
+    pub primary: bool,
+    pub prev: PrevVertex,
 }
 
 /// A next-event estimate waiting for its shadow ray.
@@ -468,11 +384,11 @@ pub(crate) struct PendingShadow {
     /// Null surfaces the shadow ray may cross.
     pub crossings: u32,
     /// The path's throughput at the vertex.
-    beta: Spectrum,
+    pub beta: Spectrum,
     /// f · L, the MIS weight and the light sample's density.
-    f_radiance: Spectrum,
-    w: f32,
-    pdf: f32,
+    pub f_radiance: Spectrum,
+    pub w: f32,
+    pub pdf: f32,
 }
 
 impl PendingShadow {

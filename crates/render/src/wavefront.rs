@@ -1,37 +1,185 @@
-//! Many paths at once: the path integrator's steps ([`PathIntegrator::bounce`] and the
-//! shadow ray of its next-event estimate) run for a packet of [`LANES`] paths, whose closest
-//! hits and shadow rays are traced together. A path that ends hands its lane to the next
-//! camera sample of the tile, so the packet stays full until the tile runs out of samples
-//! (paths of one packet have different lengths; regeneration keeps the lanes busy where a
-//! packet that waited for its longest path would run mostly empty).
+//! Many paths at once: the path integrator's steps for a packet of [`LANES`] paths, held by
+//! component ([`Paths`]) so that each step runs over all of them together: their closest
+//! hits and shadow rays are traced as packets, their interactions made in lanes
+//! ([`SurfaceLanes`]), their lights sampled together, and their BSDFs evaluated and
+//! sampled sixteen at once by the models written over [`Real`] (`Bsdf::eval_pdf_r`,
+//! `Bsdf::sample_r`), one call per material the packet holds. A path that ends hands its lane
+//! to the next camera sample of the tile, so the packet stays full until the tile runs out
+//! of samples (paths of one packet have different lengths; regeneration keeps the lanes busy
+//! where a packet that waited for its longest path would run mostly empty).
 //!
-//! Each path goes through exactly the steps of [`PathIntegrator::li`], with the same sample
-//! values, and the tile loop adds the results to the film in the order of the samples, so
-//! the image is the one `li` renders, bit for bit.
+//! Each path goes through exactly the steps of [`PathIntegrator::li`] (`path.rs`), with the
+//! same sample values and the same operations (the lane types' are the scalar ones, see
+//! `radia_math::real`), and the tile loop adds the results to the film in the order of the
+//! samples, so the image is the one `li` renders, bit for bit
+//! (`crates/render/tests/wavefront.rs`). What the lanes do not cover runs
+//! [`PathIntegrator::bounce`] for that lane alone, on its state read out of the packet and
+//! written back: surfaces whose model has no lane version, camera rays under
+//! `hide_emitters` (which may go through emitters). Emission found by a path (rare, and
+//! needing the light selection's density) is added lane by lane.
 
 use crate::integrator::{CameraSamples, Traced};
-use crate::path::{PathIntegrator, PathState, PathStats, PendingShadow};
+use crate::path::{layout, PathIntegrator, PathState, PathStats, PendingShadow, PrevVertex};
 use glam::{Vec2, Vec3};
-use radia_math::Spectrum;
+use radia_bsdf::{Bsdf, ShadingPointR};
+use radia_math::lanes::{f32x16, Vec3s};
+use radia_math::real::{Mask, Real, Vector2, Vector3};
+use radia_math::{Ray, Spectrum};
+use radia_sampling::mis::power_heuristic_r;
 use radia_sampling::{SampleStream, Sampler};
 use radia_scene::{
-    EmitterSample, LightContext, RayPacket, Scene, ShadowLanes, SurfaceInteraction, PACKET_LANES,
+    EmitterSample, LightContext, RayPacket, Scene, ShadowEnds, ShadowLanes, SurfaceLanes,
+    PACKET_LANES,
 };
 
 /// Paths in flight per packet.
 pub const LANES: usize = PACKET_LANES;
 
-/// A path in flight and where its result goes (or, in a lane without a path, the last one's
-/// stale state, overwritten field by field when the lane takes the next camera sample).
-struct Lane<'a, S> {
-    /// The index of its camera sample (its place in the output).
-    slot: usize,
-    pos: Vec2,
-    stream: SampleStream<'a, S>,
-    path: PathState,
-    shadow: Option<PendingShadow>,
-    /// Rays traced so far.
-    rays: u32,
+/// The packet's paths: what [`PathState`] holds for one path, by component over the lanes
+/// (stale in lanes without a path), and each lane's sample stream and bookkeeping.
+struct Paths<'a, S> {
+    /// Bit k: lane k holds a path.
+    live: u32,
+    /// The index of each lane's camera sample (its place in the output), its film position
+    /// and the rays it traced so far.
+    slot: [usize; LANES],
+    pos: [Vec2; LANES],
+    rays: [u32; LANES],
+    stream: [SampleStream<'a, S>; LANES],
+    depth: [u32; LANES],
+    ray_o: Vec3s,
+    ray_d: Vec3s,
+    ray_t_max: f32x16,
+    result: Vec3s,
+    beta: Vec3s,
+    eta: f32x16,
+    /// Lanes whose ray is the camera's (or continues it through null surfaces only).
+    primary: u32,
+    prev_p: Vec3s,
+    prev_n: Vec3s,
+    prev_pdf: f32x16,
+    /// Lanes whose previous vertex scattered by a delta lobe (or is the camera).
+    prev_delta: u32,
+}
+
+impl<'a, S: Sampler> Paths<'a, S> {
+    fn new(stream: impl FnMut(usize) -> SampleStream<'a, S>) -> Self {
+        let zero = Vec3s::splat(Vec3::ZERO);
+        Self {
+            live: 0,
+            slot: [0; LANES],
+            pos: [Vec2::ZERO; LANES],
+            rays: [0; LANES],
+            stream: std::array::from_fn(stream),
+            depth: [0; LANES],
+            ray_o: zero,
+            ray_d: zero,
+            ray_t_max: f32x16::ZERO,
+            result: zero,
+            beta: zero,
+            eta: f32x16::ZERO,
+            primary: 0,
+            prev_p: zero,
+            prev_n: zero,
+            prev_pdf: f32x16::ZERO,
+            prev_delta: 0,
+        }
+    }
+
+    /// Lane `k`'s path as one [`PathState`].
+    #[inline(always)]
+    fn get(&self, k: usize) -> PathState {
+        PathState {
+            ray: Ray::new(self.ray_o.lane(k), self.ray_d.lane(k), self.ray_t_max.lane(k)),
+            result: self.result.lane(k),
+            beta: self.beta.lane(k),
+            eta: self.eta.lane(k),
+            depth: self.depth[k],
+            primary: self.primary & (1 << k) != 0,
+            prev: PrevVertex {
+                p: self.prev_p.lane(k),
+                n: self.prev_n.lane(k),
+                bsdf_pdf: self.prev_pdf.lane(k),
+                bsdf_delta: self.prev_delta & (1 << k) != 0,
+            },
+        }
+    }
+
+    /// Makes lane `k`'s path `path`.
+    #[inline(always)]
+    fn set(&mut self, k: usize, path: &PathState) {
+        let bit = 1 << k;
+        self.ray_o.set_lane(k, path.ray.o);
+        self.ray_d.set_lane(k, path.ray.d);
+        self.ray_t_max.set_lane(k, path.ray.t_max);
+        self.result.set_lane(k, path.result);
+        self.beta.set_lane(k, path.beta);
+        self.eta.set_lane(k, path.eta);
+        self.depth[k] = path.depth;
+        self.primary = (self.primary & !bit) | (u32::from(path.primary) << k);
+        self.prev_p.set_lane(k, path.prev.p);
+        self.prev_n.set_lane(k, path.prev.n);
+        self.prev_pdf.set_lane(k, path.prev.bsdf_pdf);
+        self.prev_delta = (self.prev_delta & !bit) | (u32::from(path.prev.bsdf_delta) << k);
+    }
+}
+
+/// The next-event estimates of a step waiting for their shadow rays, by lane
+/// ([`PendingShadow`] by component).
+struct Shadows {
+    /// Lanes with an estimate.
+    lanes: u32,
+    ends: ShadowLanes,
+    crossings: [u32; LANES],
+    beta: Vec3s,
+    f_radiance: Vec3s,
+    w: f32x16,
+    pdf: f32x16,
+}
+
+impl Shadows {
+    fn new() -> Self {
+        let zero = Vec3s::splat(Vec3::ZERO);
+        Self {
+            lanes: 0,
+            ends: ShadowLanes::new(),
+            crossings: [0; LANES],
+            beta: zero,
+            f_radiance: zero,
+            w: f32x16::ZERO,
+            pdf: f32x16::ONE,
+        }
+    }
+
+    /// Lane `k` waits for `shadow` (made by the one-path bounce).
+    #[inline(always)]
+    fn set(&mut self, k: usize, shadow: &PendingShadow) {
+        self.lanes |= 1 << k;
+        self.ends.push(k, &shadow.ends);
+        self.crossings[k] = shadow.crossings;
+        self.beta.set_lane(k, shadow.beta);
+        self.f_radiance.set_lane(k, shadow.f_radiance);
+        self.w.set_lane(k, shadow.w);
+        self.pdf.set_lane(k, shadow.pdf);
+    }
+}
+
+/// The lanes whose bits are set in `bits`, lowest first.
+#[inline(always)]
+fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (bits != 0).then(|| {
+            let k = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            k
+        })
+    })
+}
+
+/// A lane mask from bits.
+#[inline(always)]
+fn mask(bits: u32) -> f32x16 {
+    <f32x16 as Mask>::from_bits(bits)
 }
 
 /// [`crate::integrator::Integrator::li_many`] of the path integrator.
@@ -42,188 +190,464 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
     out: &mut [Traced],
     stats: &mut PathStats,
 ) {
-    let mut lanes: [Lane<'a, S>; LANES] = std::array::from_fn(|_| Lane {
-        slot: 0,
-        pos: Vec2::ZERO,
-        stream: samples.stream(),
-        path: PathState::UNSTARTED,
-        shadow: None,
-        rays: 0,
-    });
-    // Bit k: lane k holds a path.
-    let mut live = 0u32;
+    let mut paths = Paths::new(|_| samples.stream());
     let mut next = 0usize;
-    let mut hits: [Option<SurfaceInteraction>; LANES] = [None; LANES];
-    // Made once: each step clears the active lanes only (stale rays in inactive lanes are
-    // ignored), not the whole packet (its zeroing was 1.6% of the loop).
-    let (mut rays, mut shadows) = (RayPacket::new(), RayPacket::new());
-    // The light queries of a step, by lane (stale in lanes that ask nothing).
-    let mut light_ctx = [LightContext {
-        p: Vec3::ZERO,
-        n: Vec3::ZERO,
-    }; LANES];
-    let (mut light_u_sel, mut light_u) = ([0.0; LANES], [Vec2::ZERO; LANES]);
-    let mut light_samples: [Option<EmitterSample>; LANES] = [None; LANES];
-    // The environment map's radiance and density along the escaped rays, by lane.
+    let mut its = SurfaceLanes::new();
+    // Made once: each step sets the active lanes only (stale rays in inactive lanes are
+    // ignored), not the whole packet.
+    let (mut rays, mut shadow_rays) = (RayPacket::new(), RayPacket::new());
+    // Which materials the lanes run (by BSDF index).
+    let lane_models: Vec<bool> = scene.bsdfs.iter().map(Bsdf::has_r).collect();
     let environment_map = scene.environment_map();
-    let mut escapes = [(Spectrum::ZERO, 0.0); LANES];
     loop {
         // ---- Free lanes take the next camera samples ----
-        // Their rays are made afterwards, sixteen at once (`Camera::generate_rays`): a camera
-        // ray is a chain of a division and two square roots, and made one lane at a time
-        // between the sampler's work the chains ran one after another (a fifth of the
-        // loop's own time on `scenes/furnace.xml`, whose paths are short).
-        // Each lane's fields are written in place (see `CameraSamples`).
+        // Their rays are made sixteen at once (`Camera::generate_rays`).
         let mut fresh = 0u32;
         let mut films = [[0.0; LANES]; 2];
-        for (k, lane) in lanes.iter_mut().enumerate() {
-            if live & (1 << k) != 0 || next == out.len() {
+        for k in 0..LANES {
+            if paths.live & (1 << k) != 0 || next == out.len() {
                 continue;
             }
-            let Some((pos, film)) = samples.next_into(&mut lane.stream) else {
+            let Some((pos, film)) = samples.next_into(&mut paths.stream[k]) else {
                 break;
             };
             next += 1;
             (films[0][k], films[1][k]) = (film.x, film.y);
             fresh |= 1 << k;
-            lane.slot = next - 1;
-            lane.pos = pos;
-            lane.shadow = None;
-            lane.rays = 0;
+            paths.slot[k] = next - 1;
+            paths.pos[k] = pos;
+            paths.rays[k] = 0;
         }
-        let camera_rays = (fresh != 0).then(|| scene.camera.generate_rays(&films));
-        for k in (0..LANES).filter(|k| fresh & (1 << k) != 0) {
-            let ray = camera_rays
-                .as_ref()
-                .expect("made for the fresh lanes")
-                .ray(k);
-            let lane = &mut lanes[k];
-            match integrator.start(ray) {
-                Some(path) => {
-                    lane.path = path;
-                    live |= 1 << k;
-                }
-                None => {
-                    // max_depth 0: nothing is seen.
-                    out[lane.slot] = Traced {
-                        pos: lane.pos,
-                        ..Traced::EMPTY
-                    };
+        if fresh != 0 {
+            let camera_rays = scene.camera.generate_rays(&films);
+            for k in lanes_of(fresh) {
+                match integrator.start(camera_rays.ray(k)) {
+                    Some(path) => {
+                        paths.set(k, &path);
+                        paths.live |= 1 << k;
+                    }
+                    None => {
+                        // max_depth 0: nothing is seen.
+                        out[paths.slot[k]] = Traced {
+                            pos: paths.pos[k],
+                            ..Traced::EMPTY
+                        };
+                    }
                 }
             }
         }
+        let live = paths.live;
         if live == 0 {
             return;
         }
 
         // ---- Closest hits, all lanes at once ----
-        rays.active = 0;
-        for (k, lane) in in_use(&mut lanes, live) {
-            rays.set(k, &lane.path.ray);
-            lane.rays += 1;
+        rays.o = paths.ray_o.to_rows();
+        rays.d = paths.ray_d.to_rows();
+        rays.t_max = paths.ray_t_max.to_array();
+        rays.active = live;
+        stats.rays += u64::from(live.count_ones());
+        for k in lanes_of(live) {
+            paths.rays[k] += 1;
         }
-        stats.rays += u64::from(rays.active.count_ones());
-        scene.intersect_packet(&rays, &mut hits);
+        scene.intersect_packet_lanes(&rays, &mut its);
 
-        // ---- The light samples of the bounces' next-event estimates, sixteen at once ----
-        // (Only in scenes whose lights are all sampled in lanes: elsewhere each bounce
-        // samples its own, `Scene::samples_lights_in_lanes`.)
-        let mut asks = 0u32;
-        if integrator.batches_lights() {
-            for (k, lane) in in_use(&mut lanes, live) {
-                let query =
-                    integrator.light_query(scene, &lane.path, hits[k].as_ref(), &mut lane.stream);
-                if let Some(q) = query {
-                    (light_ctx[k], light_u_sel[k], light_u[k]) = q;
-                    asks |= 1 << k;
-                }
+        // ---- Which lanes step one path at a time ----
+        let mut bsdf_of = [0u32; LANES];
+        let mut scalar = if integrator.hide_emitters {
+            live & paths.primary
+        } else {
+            0
+        };
+        for k in lanes_of(live & its.hit) {
+            let b = scene.shapes[its.shape[k] as usize].bsdf;
+            bsdf_of[k] = b;
+            if !lane_models[b as usize] {
+                scalar |= 1 << k;
             }
+        }
+        let vector = live & !scalar;
+        let mut shadows = Shadows::new();
+        let mut ends = 0u32;
+
+        // ---- Escaped rays: the environment's emission ----
+        let escaped = vector & !its.hit;
+        if escaped != 0 {
+            environment(
+                integrator,
+                scene,
+                environment_map,
+                &mut paths,
+                escaped,
+            );
+            ends |= escaped;
+        }
+
+        // ---- Emission of the surfaces hit ----
+        let hit = vector & its.hit;
+        for k in lanes_of(hit) {
+            let Some(emitter) = scene.shapes[its.shape[k] as usize].emitter else {
+                continue;
+            };
+            let si = its.get(k).expect("a lane with a hit");
+            let le = scene.emitters[emitter as usize].eval_surface(&si);
+            if le != Spectrum::ZERO {
+                let prev = paths.get(k).prev;
+                let d = paths.ray_d.lane(k);
+                let w = integrator.mis_emitter_hit(&prev, |ctx| {
+                    scene.pdf_emitter_direction(ctx, emitter, Some(&si), d)
+                });
+                let result = paths.result.lane(k) + paths.beta.lane(k) * le * w;
+                paths.result.set_lane(k, result);
+            }
+        }
+        let mut going = 0u32;
+        for k in lanes_of(hit) {
+            if paths.depth[k] + 1 >= integrator.max_depth {
+                ends |= 1 << k;
+            } else {
+                going |= 1 << k;
+            }
+        }
+
+        // ---- Next-event estimation, sixteen at once ----
+        // The shading points of the lane models: uv only (none of them reads the surface's
+        // tangents, `Bsdf::reads_surface_frame`).
+        let sp = ShadingPointR {
+            uv: its.uv,
+            dp_du: Vector3::splat(Vec3::X),
+            dp_dv: Vector3::splat(Vec3::Y),
+            n: Vector3::splat(Vec3::Z),
+        };
+        let mut asks = 0u32;
+        let mut light_ctx = [LightContext {
+            p: Vec3::ZERO,
+            n: Vec3::ZERO,
+        }; LANES];
+        let (mut light_u_sel, mut light_u) = ([0.0; LANES], [Vec2::ZERO; LANES]);
+        for k in lanes_of(going) {
+            if !integrator.estimates(&scene.bsdfs[bsdf_of[k] as usize]) {
+                continue;
+            }
+            asks |= 1 << k;
+            let (u_sel, u) = integrator.light_values(scene, paths.depth[k], &mut paths.stream[k]);
+            (light_u_sel[k], light_u[k]) = (u_sel, u);
+            light_ctx[k] = LightContext {
+                p: its.p.lane(k),
+                n: its.frame.n.lane(k),
+            };
         }
         if asks != 0 {
-            scene.sample_emitter_directions(
+            let mut samples: [Option<EmitterSample>; LANES] = [None; LANES];
+            scene.sample_emitter_directions(asks, &light_ctx, &light_u_sel, &light_u, &mut samples);
+            estimates(
+                scene,
+                &its,
+                &sp,
+                &bsdf_of,
                 asks,
-                &light_ctx,
-                &light_u_sel,
-                &light_u,
-                &mut light_samples,
+                &samples,
+                integrator,
+                &mut paths,
+                &mut shadows,
             );
-        }
-
-        // ---- The environment map along the rays that escaped, sixteen at once ----
-        let mut escaped = 0u32;
-        if let Some(map) = environment_map {
-            let mut d = [[0.0; LANES]; 3];
-            for (k, lane) in in_use(&mut lanes, live) {
-                if hits[k].is_none() {
-                    escaped |= 1 << k;
-                    (d[0][k], d[1][k], d[2][k]) = lane.path.ray.d.into();
-                }
-            }
-            if escaped != 0 {
-                map.eval_pdfs(escaped, &d, &mut escapes);
+            stats.rays += u64::from(shadows.lanes.count_ones());
+            for k in lanes_of(shadows.lanes) {
+                paths.rays[k] += 1;
             }
         }
 
-        // ---- Each path's bounce: emission, NEE, BSDF sample ----
-        let mut ends = 0u32;
-        for (k, lane) in in_use(&mut lanes, live) {
-            // Its rays as `li` counts them: the closest hit (above), and those the bounce
-            // traces or will (shadow ray, emitters skipped).
+        // ---- BSDF sampling, sixteen at once ----
+        if going != 0 {
+            ends |= scatter(scene, &its, &sp, &bsdf_of, going, integrator, &mut paths);
+        }
+
+        // ---- The lanes that step one path at a time ----
+        for k in lanes_of(scalar) {
+            let mut path = paths.get(k);
+            let si = its.get(k);
+            let mut shadow = None;
             let before = stats.rays;
             let goes_on = integrator.bounce(
                 scene,
-                &mut lane.path,
-                hits[k].as_ref(),
-                (asks & (1 << k) != 0).then_some(&light_samples[k]),
-                (escaped & (1 << k) != 0).then_some(&escapes[k]),
-                &mut lane.stream,
+                &mut path,
+                si.as_ref(),
+                &mut paths.stream[k],
                 stats,
-                &mut lane.shadow,
+                &mut shadow,
             );
-            lane.rays += (stats.rays - before) as u32;
+            paths.rays[k] += (stats.rays - before) as u32;
+            paths.set(k, &path);
+            if let Some(shadow) = &shadow {
+                shadows.set(k, shadow);
+            }
             ends |= u32::from(!goes_on) << k;
         }
 
         // ---- Shadow rays, made and traced all lanes at once ----
-        let mut shadow_ends = ShadowLanes::new();
-        for (k, lane) in in_use(&mut lanes, live) {
-            if let Some(shadow) = &lane.shadow {
-                shadow_ends.push(k, &shadow.ends);
+        if shadows.lanes != 0 {
+            shadows.ends.write(&mut shadow_rays);
+            let blocked = scene.occluded_packet(&shadow_rays);
+            let mut transmittance = f32x16::ONE;
+            for k in lanes_of(blocked & shadows.lanes) {
+                let t = scene.transmittance_of_blocked(&shadow_rays.ray(k), shadows.crossings[k]);
+                transmittance.set_lane(k, t);
             }
-        }
-        shadow_ends.write(&mut shadows);
-        let blocked = scene.occluded_packet(&shadows);
-        for (k, lane) in in_use(&mut lanes, live) {
-            // Read in place (a copy made just before its fields are read stalls on store
-            // forwarding).
-            if let Some(shadow) = &lane.shadow {
-                let transmittance = if blocked & (1 << k) != 0 {
-                    scene.transmittance_of_blocked(&shadows.ray(k), shadow.crossings)
-                } else {
-                    1.0
-                };
-                shadow.resolve(&mut lane.path, transmittance);
-                lane.shadow = None;
-            }
+            // `PendingShadow::resolve`.
+            let estimate = Vector3::select(
+                transmittance.equals(f32x16::ZERO),
+                Vector3::zero(),
+                shadows.f_radiance * (shadows.w * transmittance / shadows.pdf),
+            );
+            paths.result = Vector3::select(
+                mask(shadows.lanes),
+                paths.result + shadows.beta * estimate,
+                paths.result,
+            );
         }
 
         // ---- Finished paths give up their lanes ----
-        for (_, lane) in in_use(&mut lanes, ends) {
-            out[lane.slot] = Traced {
-                pos: lane.pos,
-                l: lane.path.result,
-                rays: lane.rays,
+        for k in lanes_of(ends & live) {
+            out[paths.slot[k]] = Traced {
+                pos: paths.pos[k],
+                l: paths.result.lane(k),
+                rays: paths.rays[k],
             };
         }
-        live &= !ends;
+        paths.live &= !ends;
     }
 }
 
-/// The lanes whose bits are set in `mask`, with their indices.
+/// The environment's emission along the rays of `lanes`, which escaped the scene
+/// (`PathIntegrator::bounce` with no hit, for paths that are not camera rays under
+/// `hide_emitters`).
+#[inline(never)]
+fn environment<S: Sampler>(
+    integrator: &PathIntegrator,
+    scene: &Scene,
+    map: Option<&radia_scene::emitter::Envmap>,
+    paths: &mut Paths<'_, S>,
+    lanes: u32,
+) {
+    let Some(env) = scene.environment else {
+        return;
+    };
+    let emitter = &scene.emitters[env as usize];
+    let mut found = [(Spectrum::ZERO, 0.0); LANES];
+    match map {
+        Some(map) => map.eval_pdfs(lanes, &paths.ray_d.to_rows(), &mut found),
+        None => {
+            for k in lanes_of(lanes) {
+                found[k] = emitter.eval_environment_pdf(paths.ray_d.lane(k));
+            }
+        }
+    }
+    let mut le = Vec3s::splat(Vec3::ZERO);
+    let mut w = f32x16::ZERO;
+    for k in lanes_of(lanes) {
+        let (radiance, pdf_dir) = found[k];
+        let prev = PrevVertex {
+            p: paths.prev_p.lane(k),
+            n: paths.prev_n.lane(k),
+            bsdf_pdf: paths.prev_pdf.lane(k),
+            bsdf_delta: paths.prev_delta & (1 << k) != 0,
+        };
+        le.set_lane(k, radiance);
+        w.set_lane(
+            k,
+            integrator.mis_emitter_hit(&prev, |ctx| scene.pdf_environment(ctx, env, pdf_dir)),
+        );
+    }
+    paths.result = Vector3::select(
+        mask(lanes),
+        paths.result + paths.beta * le * w,
+        paths.result,
+    );
+}
+
+/// The lanes of `lanes` with the same BSDF as their lowest one, and that BSDF's index, one
+/// group after another.
 #[inline(always)]
-fn in_use<T>(lanes: &mut [T; LANES], mask: u32) -> impl Iterator<Item = (usize, &mut T)> {
-    lanes
-        .iter_mut()
-        .enumerate()
-        .filter(move |(k, _)| mask & (1 << k) != 0)
+fn by_material(bsdf_of: &[u32; LANES], mut lanes: u32) -> impl Iterator<Item = (u32, u32)> + '_ {
+    std::iter::from_fn(move || {
+        if lanes == 0 {
+            return None;
+        }
+        let b = bsdf_of[lanes.trailing_zeros() as usize];
+        let mut group = 0u32;
+        for k in lanes_of(lanes) {
+            if bsdf_of[k] == b {
+                group |= 1 << k;
+            }
+        }
+        lanes &= !group;
+        Some((b, group))
+    })
+}
+
+/// The next-event estimates of `lanes` from their light samples (`PathIntegrator::estimate`
+/// in lanes): each lane's BSDF value and density towards its sample, the MIS weight, and the
+/// estimate's shadow ray into `shadows`; lanes with nothing to trace add 0 (β · 0, as the
+/// one-path bounce does).
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn estimates<S: Sampler>(
+    scene: &Scene,
+    its: &SurfaceLanes,
+    sp: &ShadingPointR<f32x16>,
+    bsdf_of: &[u32; LANES],
+    lanes: u32,
+    samples: &[Option<EmitterSample>; LANES],
+    integrator: &PathIntegrator,
+    paths: &mut Paths<'_, S>,
+    shadows: &mut Shadows,
+) {
+    let mut valid = 0u32;
+    let mut delta = 0u32;
+    let mut d = Vec3s::splat(Vec3::ZERO);
+    let mut radiance = Vec3s::splat(Vec3::ZERO);
+    let mut pdf = f32x16::ONE;
+    for k in lanes_of(lanes) {
+        let Some(es) = &samples[k] else { continue };
+        valid |= 1 << k;
+        delta |= u32::from(es.is_delta) << k;
+        d.set_lane(k, es.d);
+        radiance.set_lane(k, es.radiance);
+        pdf.set_lane(k, es.pdf);
+    }
+    let wo = its.frame.to_local(d);
+    let mut f = Vec3s::splat(Vec3::ZERO);
+    let mut bsdf_pdf = f32x16::ZERO;
+    for (b, group) in by_material(bsdf_of, valid) {
+        let (gf, gpdf) = scene.bsdfs[b as usize]
+            .eval_pdf_r(sp, its.wi, wo)
+            .expect("a lane model");
+        let m = mask(group);
+        f = Vector3::select(m, gf, f);
+        bsdf_pdf = m.select(gpdf, bsdf_pdf);
+    }
+    // Delta lights need no MIS (BSDF sampling never finds them).
+    let w = mask(delta).select(f32x16::ONE, power_heuristic_r(pdf, bsdf_pdf));
+    let traced = valid & !f.is_zero().bits();
+    // Nothing to trace: the estimate is 0, added as the full estimate would be (β · 0 is
+    // not 0 for a β that is not finite).
+    let zero = lanes & !traced;
+    if zero != 0 {
+        paths.result = Vector3::select(
+            mask(zero),
+            paths.result + paths.beta * Vector3::zero(),
+            paths.result,
+        );
+    }
+    if traced == 0 {
+        return;
+    }
+    let m = mask(traced);
+    shadows.lanes |= traced;
+    shadows.beta = Vector3::select(m, paths.beta, shadows.beta);
+    shadows.f_radiance = Vector3::select(m, f * radiance, shadows.f_radiance);
+    shadows.w = m.select(w, shadows.w);
+    shadows.pdf = m.select(pdf, shadows.pdf);
+    for k in lanes_of(traced) {
+        let es = samples[k].as_ref().expect("a valid sample");
+        let at_infinity = !es.dist.is_finite();
+        shadows.ends.push(
+            k,
+            &ShadowEnds {
+                p: its.p.lane(k),
+                p_error: its.p_error.lane(k),
+                n: its.n.lane(k),
+                target: if at_infinity { es.d } else { es.p },
+                target_n: es.n,
+                target_error: es.p_error,
+                at_infinity,
+            },
+        );
+        // Shadow rays may cross null surfaces, each a bounce.
+        shadows.crossings[k] = integrator.max_depth.saturating_sub(paths.depth[k] + 2);
+    }
+}
+
+/// BSDF sampling and Russian roulette for `lanes` (the end of `PathIntegrator::bounce` in
+/// lanes): the next rays of the paths that go on; returns the lanes whose paths end.
+#[inline(never)]
+fn scatter<S: Sampler>(
+    scene: &Scene,
+    its: &SurfaceLanes,
+    sp: &ShadingPointR<f32x16>,
+    bsdf_of: &[u32; LANES],
+    lanes: u32,
+    integrator: &PathIntegrator,
+    paths: &mut Paths<'_, S>,
+) -> u32 {
+    // The sample values, lane by lane from each path's stream.
+    let mut u1 = f32x16::splat(0.5);
+    let mut u2 = Vector2::new(f32x16::ZERO, f32x16::ZERO);
+    for k in lanes_of(lanes) {
+        let stream = &mut paths.stream[k];
+        let block = layout::bounce(paths.depth[k]);
+        stream.seek(block + layout::BSDF_DIRECTION);
+        u2.set_lane(k, stream.next_2d());
+        // A value nothing reads is not drawn (the layout fixes every other one).
+        if scene.bsdfs[bsdf_of[k] as usize].samples_lobe() {
+            u1.set_lane(k, stream.next_1d());
+        }
+    }
+    let zero3 = Vec3s::splat(Vec3::ZERO);
+    let mut wo = zero3;
+    let mut weight = zero3;
+    let mut pdf = f32x16::ZERO;
+    let mut eta = f32x16::ONE;
+    let mut valid = 0u32;
+    let mut delta = 0u32;
+    for (b, group) in by_material(bsdf_of, lanes) {
+        let bs = scene.bsdfs[b as usize]
+            .sample_r(sp, its.wi, u1, u2)
+            .expect("a lane model");
+        let m = mask(group);
+        wo = Vector3::select(m, bs.wo, wo);
+        weight = Vector3::select(m, bs.weight, weight);
+        pdf = m.select(bs.pdf, pdf);
+        eta = m.select(bs.eta, eta);
+        valid |= group & bs.valid.bits();
+        delta |= group & bs.delta.bits();
+    }
+    let on = valid & !weight.is_zero().bits();
+    let mut ends = lanes & !on;
+    if on == 0 {
+        return ends;
+    }
+    let m = mask(on);
+    paths.beta = Vector3::select(m, paths.beta * weight, paths.beta);
+    paths.eta = m.select(paths.eta * eta, paths.eta);
+    paths.primary &= !on;
+    paths.prev_p = Vector3::select(m, its.p, paths.prev_p);
+    paths.prev_n = Vector3::select(m, its.frame.n, paths.prev_n);
+    paths.prev_pdf = m.select(pdf, paths.prev_pdf);
+    paths.prev_delta = (paths.prev_delta & !on) | (delta & on);
+    let d = its.frame.to_world(wo);
+    paths.ray_o = Vector3::select(m, its.spawn_origins(d), paths.ray_o);
+    paths.ray_d = Vector3::select(m, d, paths.ray_d);
+    paths.ray_t_max = m.select(f32x16::splat(f32::INFINITY), paths.ray_t_max);
+
+    // ---- Russian roulette (path.cpp: q = min(max(β)·η², 0.95)) ----
+    let beta_max = paths.beta.max_element();
+    let q = (beta_max * paths.eta * paths.eta).min(f32x16::splat(0.95));
+    let mut roulette = 0u32;
+    let mut u = f32x16::ZERO;
+    for k in lanes_of(on) {
+        paths.depth[k] += 1;
+        if paths.depth[k] >= integrator.rr_depth {
+            roulette |= 1 << k;
+            let stream = &mut paths.stream[k];
+            stream.seek(layout::bounce(paths.depth[k] - 1) + layout::ROULETTE);
+            u.set_lane(k, stream.next_1d());
+        }
+    }
+    let survive = u.less(q).bits();
+    ends |= roulette & !survive;
+    let kept = roulette & survive;
+    paths.beta = Vector3::select(mask(kept), paths.beta.div(q), paths.beta);
+    ends |= on & beta_max.equals(f32x16::ZERO).bits();
+    ends
 }

@@ -1,5 +1,7 @@
 //! Multiple importance sampling weights (Veach 1997, ch. 9).
 
+use radia_math::real::Real;
+
 /// Power heuristic with β = 2 for one sample from each strategy: the weight of the strategy
 /// whose pdf is `pdf_a`. Mitsuba's `mis_weight`; non-finite results become 0 (path.cpp does
 /// the same with `dr::select(dr::isfinite(w), w, 0)`).
@@ -9,15 +11,17 @@
 /// weight of 0 for both strategies), and squares of tiny pdfs underflow to 0.
 #[inline]
 pub fn power_heuristic(pdf_a: f32, pdf_b: f32) -> f32 {
+    power_heuristic_r(pdf_a, pdf_b)
+}
+
+/// [`power_heuristic`] over any [`Real`].
+#[inline(always)]
+pub fn power_heuristic_r<R: Real>(pdf_a: R, pdf_b: R) -> R {
     let m = pdf_a.max(pdf_b);
     let (a, b) = (pdf_a / m, pdf_b / m);
     let a2 = a * a;
     let w = a2 / (a2 + b * b);
-    if w.is_finite() {
-        w
-    } else {
-        0.0
-    }
+    R::select(w.is_finite(), w, R::zero())
 }
 
 #[cfg(test)]

@@ -90,7 +90,7 @@ impl ShadowLanes {
 
 /// [`crate::offset_origin`] in each lane.
 #[inline(always)]
-fn offset_origin(p: Vec3s, p_error: Vec3s, n: Vec3s, d: Vec3s) -> Vec3s {
+pub(crate) fn offset_origin(p: Vec3s, p_error: Vec3s, n: Vec3s, d: Vec3s) -> Vec3s {
     let dist = n.abs().dot(p_error);
     let along = n * dist;
     let offset = Vec3s::select(n.dot(d).simd_ge(f32x16::ZERO), along, -along);

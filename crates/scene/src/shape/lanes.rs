@@ -609,6 +609,13 @@ impl SurfaceLanes {
         })
     }
 
+    /// The origins of rays leaving the surfaces along `d` (world space), lane by lane
+    /// [`SurfaceInteraction::spawn_ray`]'s.
+    #[inline(always)]
+    pub fn spawn_origins(&self, d: Vec3s) -> Vec3s {
+        crate::shadow_lanes::offset_origin(self.p, self.p_error, self.n, d)
+    }
+
     /// Makes lane `k` hold `si` (or no hit).
     #[inline(always)]
     pub fn set(&mut self, k: usize, si: Option<&SurfaceInteraction>) {
