@@ -28,8 +28,7 @@ use radia_math::{Ray, Spectrum};
 use radia_sampling::mis::power_heuristic_r;
 use radia_sampling::{SampleStream, Sampler};
 use radia_scene::{
-    EmitterSample, LightContext, RayPacket, Scene, ShadowEnds, ShadowLanes, SurfaceLanes,
-    PACKET_LANES,
+    EmitterSampleLanes, RayPacket, Scene, ShadowLanes, SurfaceLanes, PACKET_LANES,
 };
 
 /// Paths in flight per packet.
@@ -320,26 +319,25 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
             n: Vector3::splat(Vec3::Z),
         };
         let mut asks = 0u32;
-        let mut light_ctx = [LightContext {
-            p: Vec3::ZERO,
-            n: Vec3::ZERO,
-        }; LANES];
-        let (mut light_u_sel, mut light_u) = ([0.0; LANES], [Vec2::ZERO; LANES]);
+        let mut u_sel = f32x16::splat(0.5);
+        let mut u = Vector2::new(f32x16::ZERO, f32x16::ZERO);
+        let choice_uses_sample = scene.lights.choice_uses_sample();
         for k in lanes_of(going) {
             if !integrator.estimates(&scene.bsdfs[bsdf_of[k] as usize]) {
                 continue;
             }
             asks |= 1 << k;
-            let (u_sel, u) = integrator.light_values(scene, paths.depth[k], &mut paths.stream[k]);
-            (light_u_sel[k], light_u[k]) = (u_sel, u);
-            light_ctx[k] = LightContext {
-                p: its.p.lane(k),
-                n: its.frame.n.lane(k),
-            };
+            // `PathIntegrator::light_values`.
+            let stream = &mut paths.stream[k];
+            stream.seek(layout::bounce(paths.depth[k]) + layout::LIGHT_POSITION);
+            u.set_lane(k, stream.next_2d());
+            if choice_uses_sample {
+                u_sel.set_lane(k, stream.next_1d());
+            }
         }
         if asks != 0 {
-            let mut samples: [Option<EmitterSample>; LANES] = [None; LANES];
-            scene.sample_emitter_directions(asks, &light_ctx, &light_u_sel, &light_u, &mut samples);
+            let mut samples = EmitterSampleLanes::new();
+            scene.sample_emitter_directions(asks, its.p, its.frame.n, u_sel, u, &mut samples);
             estimates(
                 scene,
                 &its,
@@ -497,24 +495,13 @@ fn estimates<S: Sampler>(
     sp: &ShadingPointR<f32x16>,
     bsdf_of: &[u32; LANES],
     lanes: u32,
-    samples: &[Option<EmitterSample>; LANES],
+    samples: &EmitterSampleLanes,
     integrator: &PathIntegrator,
     paths: &mut Paths<'_, S>,
     shadows: &mut Shadows,
 ) {
-    let mut valid = 0u32;
-    let mut delta = 0u32;
-    let mut d = Vec3s::splat(Vec3::ZERO);
-    let mut radiance = Vec3s::splat(Vec3::ZERO);
-    let mut pdf = f32x16::ONE;
-    for k in lanes_of(lanes) {
-        let Some(es) = &samples[k] else { continue };
-        valid |= 1 << k;
-        delta |= u32::from(es.is_delta) << k;
-        d.set_lane(k, es.d);
-        radiance.set_lane(k, es.radiance);
-        pdf.set_lane(k, es.pdf);
-    }
+    let valid = lanes & samples.valid;
+    let (d, radiance, pdf) = (samples.d, samples.radiance, samples.pdf);
     let wo = its.frame.to_local(d);
     let mut f = Vec3s::splat(Vec3::ZERO);
     let mut bsdf_pdf = f32x16::ZERO;
@@ -527,7 +514,7 @@ fn estimates<S: Sampler>(
         bsdf_pdf = m.select(gpdf, bsdf_pdf);
     }
     // Delta lights need no MIS (BSDF sampling never finds them).
-    let w = mask(delta).select(f32x16::ONE, power_heuristic_r(pdf, bsdf_pdf));
+    let w = mask(samples.delta).select(f32x16::ONE, power_heuristic_r(pdf, bsdf_pdf));
     let traced = valid & !f.is_zero().bits();
     // Nothing to trace: the estimate is 0, added as the full estimate would be (β · 0 is
     // not 0 for a β that is not finite).
@@ -548,21 +535,20 @@ fn estimates<S: Sampler>(
     shadows.f_radiance = Vector3::select(m, f * radiance, shadows.f_radiance);
     shadows.w = m.select(w, shadows.w);
     shadows.pdf = m.select(pdf, shadows.pdf);
+    // The shadow rays' ends (`SurfaceInteraction::shadow_ends`): to the sampled point, or
+    // along the direction to a light at infinity.
+    let at_infinity = !samples.dist.is_finite().bits();
+    shadows.ends.push_lanes(
+        traced,
+        at_infinity,
+        its.p,
+        its.p_error,
+        its.n,
+        Vector3::select(mask(at_infinity), samples.d, samples.p),
+        samples.n,
+        samples.p_error,
+    );
     for k in lanes_of(traced) {
-        let es = samples[k].as_ref().expect("a valid sample");
-        let at_infinity = !es.dist.is_finite();
-        shadows.ends.push(
-            k,
-            &ShadowEnds {
-                p: its.p.lane(k),
-                p_error: its.p_error.lane(k),
-                n: its.n.lane(k),
-                target: if at_infinity { es.d } else { es.p },
-                target_n: es.n,
-                target_error: es.p_error,
-                at_infinity,
-            },
-        );
         // Shadow rays may cross null surfaces, each a bounce.
         shadows.crossings[k] = integrator.max_depth.saturating_sub(paths.depth[k] + 2);
     }

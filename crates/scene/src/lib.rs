@@ -17,7 +17,7 @@ mod spherical;
 pub use accel::{Accel, Hit, PacketHits, RayPacket, PACKET_LANES};
 pub use camera::{look_at, Camera};
 pub use description::*;
-pub use emitter::{Emitter, EmitterSample};
+pub use emitter::{Emitter, EmitterSample, EmitterSampleLanes};
 pub use lights::{LightContext, LightSamplerKind, Lights};
 pub use shadow_lanes::ShadowLanes;
 use shape::{DiskHits, MeshHits, ShapeKind, SphereHits};

@@ -13,12 +13,16 @@ use wide::i32x16;
 
 const _: () = assert!(WIDTH == PACKET_LANES);
 
-/// The ends of the shadow rays of a packet, gathered lane by lane.
+/// The ends of the shadow rays of a packet, by component.
 pub struct ShadowLanes {
     lanes: u32,
     at_infinity: u32,
-    /// `p`, `p_error`, `n`, `target`, `target_n`, `target_error`, each `[axis][lane]`.
-    rows: [[[f32; WIDTH]; 3]; 6],
+    p: Vec3s,
+    p_error: Vec3s,
+    n: Vec3s,
+    target: Vec3s,
+    target_n: Vec3s,
+    target_error: Vec3s,
 }
 
 impl Default for ShadowLanes {
@@ -29,33 +33,59 @@ impl Default for ShadowLanes {
 
 impl ShadowLanes {
     pub fn new() -> Self {
+        let zero = Vec3s::splat(glam::Vec3::ZERO);
         Self {
             lanes: 0,
             at_infinity: 0,
-            rows: [[[0.0; WIDTH]; 3]; 6],
+            p: zero,
+            p_error: zero,
+            n: zero,
+            target: zero,
+            target_n: zero,
+            target_error: zero,
         }
     }
 
     /// Lane `lane`'s shadow ray joins `ends`.
     #[inline(always)]
     pub fn push(&mut self, lane: usize, ends: &ShadowEnds) {
-        self.lanes |= 1 << lane;
-        if ends.at_infinity {
-            self.at_infinity |= 1 << lane;
-        }
-        let vectors = [
-            ends.p,
-            ends.p_error,
-            ends.n,
-            ends.target,
-            ends.target_n,
-            ends.target_error,
-        ];
-        for (rows, v) in self.rows.iter_mut().zip(vectors) {
-            for axis in 0..3 {
-                rows[axis][lane] = v[axis];
-            }
-        }
+        let bit = 1 << lane;
+        self.lanes |= bit;
+        self.at_infinity = (self.at_infinity & !bit) | (u32::from(ends.at_infinity) << lane);
+        self.p.set_lane(lane, ends.p);
+        self.p_error.set_lane(lane, ends.p_error);
+        self.n.set_lane(lane, ends.n);
+        self.target.set_lane(lane, ends.target);
+        self.target_n.set_lane(lane, ends.target_n);
+        self.target_error.set_lane(lane, ends.target_error);
+    }
+
+    /// The lanes `lanes` join the points `p` (error bounds `p_error`, geometric normals `n`)
+    /// and their light samples' points `target` (`target_n`, `target_error`), or, in the
+    /// lanes `at_infinity`, leave `p` along the directions `target`: [`ShadowLanes::push`]
+    /// for many lanes at once.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub fn push_lanes(
+        &mut self,
+        lanes: u32,
+        at_infinity: u32,
+        p: Vec3s,
+        p_error: Vec3s,
+        n: Vec3s,
+        target: Vec3s,
+        target_n: Vec3s,
+        target_error: Vec3s,
+    ) {
+        let m = mask(lanes);
+        self.lanes |= lanes;
+        self.at_infinity = (self.at_infinity & !lanes) | (at_infinity & lanes);
+        self.p = Vec3s::select(m, p, self.p);
+        self.p_error = Vec3s::select(m, p_error, self.p_error);
+        self.n = Vec3s::select(m, n, self.n);
+        self.target = Vec3s::select(m, target, self.target);
+        self.target_n = Vec3s::select(m, target_n, self.target_n);
+        self.target_error = Vec3s::select(m, target_error, self.target_error);
     }
 
     /// The rays of the pushed lanes into `packet`, whose active lanes become those (the
@@ -66,8 +96,8 @@ impl ShadowLanes {
         if self.lanes == 0 {
             return;
         }
-        let [p, p_error, n, target, target_n, target_error] =
-            self.rows.map(|rows| Vec3s::from_rows(&rows));
+        let (p, p_error, n) = (self.p, self.p_error, self.n);
+        let (target, target_n, target_error) = (self.target, self.target_n, self.target_error);
         // To a point: both ends offset.
         let o = offset_origin(p, p_error, n, target - p);
         let t = offset_origin(target, target_error, target_n, o - target);
@@ -75,7 +105,7 @@ impl ShadowLanes {
         let dist = delta.length_squared().sqrt();
         let (mut o, mut d) = (o, delta.div(dist));
         let mut t_max = dist * f32x16::splat(1.0 - SHADOW_EPSILON);
-        if self.at_infinity != 0 {
+        if self.at_infinity & self.lanes != 0 {
             // Along a direction, towards a light at infinity.
             let far = mask(self.at_infinity);
             o = Vec3s::select(far, offset_origin(p, p_error, n, target), o);

@@ -34,6 +34,8 @@ pub use spot::SpotLight;
 use crate::description::EmitterDesc;
 use crate::shape::{Shape, SurfaceInteraction};
 use glam::{Vec2, Vec3};
+use radia_math::lanes::{f32x16, Vec3s};
+use radia_math::real::Real;
 use radia_math::Spectrum;
 
 /// Every kind of light radia knows: a closed set dispatched by `match`.
@@ -74,6 +76,79 @@ pub struct EmitterSample {
     pub radiance: Spectrum,
     /// True for delta lights (reachable only by next-event estimation).
     pub is_delta: bool,
+}
+
+/// [`EmitterSample`]s of a packet's lanes, by component (stale where not `valid`).
+#[derive(Clone, Copy, Debug)]
+pub struct EmitterSampleLanes {
+    /// Lanes with a sample (the one-lane `Option` is `Some`).
+    pub valid: u32,
+    /// Lanes whose sample is of a delta light.
+    pub delta: u32,
+    pub d: Vec3s,
+    pub dist: f32x16,
+    pub p: Vec3s,
+    pub n: Vec3s,
+    pub p_error: Vec3s,
+    pub pdf: f32x16,
+    pub radiance: Vec3s,
+}
+
+impl Default for EmitterSampleLanes {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl EmitterSampleLanes {
+    pub fn new() -> Self {
+        let zero = Vec3s::splat(Vec3::ZERO);
+        Self {
+            valid: 0,
+            delta: 0,
+            d: zero,
+            dist: f32x16::ZERO,
+            p: zero,
+            n: zero,
+            p_error: zero,
+            pdf: f32x16::ONE,
+            radiance: zero,
+        }
+    }
+
+    /// Lane `k`'s sample.
+    #[inline(always)]
+    pub fn get(&self, k: usize) -> Option<EmitterSample> {
+        (self.valid & (1 << k) != 0).then(|| EmitterSample {
+            d: self.d.lane(k),
+            dist: self.dist.lane(k),
+            p: self.p.lane(k),
+            n: self.n.lane(k),
+            p_error: self.p_error.lane(k),
+            pdf: self.pdf.lane(k),
+            radiance: self.radiance.lane(k),
+            is_delta: self.delta & (1 << k) != 0,
+        })
+    }
+
+    /// Makes lane `k`'s sample `es`.
+    #[inline(always)]
+    pub fn set(&mut self, k: usize, es: Option<&EmitterSample>) {
+        let bit = 1 << k;
+        let Some(es) = es else {
+            self.valid &= !bit;
+            return;
+        };
+        self.valid |= bit;
+        self.delta = (self.delta & !bit) | (u32::from(es.is_delta) << k);
+        self.d.set_lane(k, es.d);
+        self.dist.set_lane(k, es.dist);
+        self.p.set_lane(k, es.p);
+        self.n.set_lane(k, es.n);
+        self.p_error.set_lane(k, es.p_error);
+        self.pdf.set_lane(k, es.pdf);
+        self.radiance.set_lane(k, es.radiance);
+    }
 }
 
 impl Emitter {

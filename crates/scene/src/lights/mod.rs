@@ -22,14 +22,15 @@ mod tests;
 
 pub use bvh::{BvhLight, LightBounds, LightBvh};
 
-use crate::emitter::{Emitter, EmitterSample};
+use crate::emitter::{Emitter, EmitterSample, EmitterSampleLanes};
 use crate::shape::{
     uniform_sphere_directions, LightSpheres, LightTriangles, Shape, ShapeKind, SurfaceInteraction,
 };
 use crate::Scene;
 use glam::{Vec2, Vec3};
 use radia_bsdf::Texture;
-use radia_math::Spectrum;
+use radia_math::lanes::{f32x16, mask, Vec3s};
+use radia_math::real::{Real, Vector2};
 use radia_sampling::{warp, DiscreteDistribution};
 
 /// Queries of [`Scene::sample_emitter_directions`].
@@ -359,32 +360,10 @@ impl Scene {
         Some(es)
     }
 
-    /// Whether [`Scene::sample_emitter_directions`] samples every light of the scene in
-    /// lanes, and where that pays: environment maps, and area lights of constant radiance on
-    /// flat meshes and spheres only. Measured at one thread against sampling each path's
-    /// light in its own step: the Cornell box 0.92x the time, Veach MIS 0.98x, 64 small
-    /// lights 0.97x, the sky and sun of `scenes/envmap.xml` 0.89x; but a smooth mesh light,
-    /// or an environment map while it was still sampled one lane at a time, 1.04-1.06x, and
-    /// a constant environment beside flat area lights (sampled in lanes, but its uniform
-    /// direction is cheap alone) 1.02-1.06x on six scenes of `scenes/` (0.93x on one): the
-    /// batching's bookkeeping with nothing or little to gain.
-    pub fn samples_lights_in_lanes(&self) -> bool {
-        self.emitters.iter().all(|e| match e {
-            Emitter::Envmap(_) => true,
-            Emitter::Area(light) => {
-                let shape = &self.shapes[light.shape as usize];
-                // (A flat mesh: its first triangle stands for all.)
-                let flat_or_sphere =
-                    shape.light_sphere().is_some() || shape.flat_light_triangle(0).is_some();
-                matches!(light.radiance, Texture::Constant(_)) && flat_or_sphere
-            }
-            _ => false,
-        })
-    }
-
     /// [`Scene::sample_emitter_direction`] for the lanes `active` of sixteen queries at
-    /// once: `out[k]` becomes, bit for bit, what it returns for `ctx[k]`, `u_sel[k]` and
-    /// `u[k]` (other lanes are left as they are). The light is chosen lane by lane; area
+    /// once, from the points `p` with shading normals `n`, choice values `u_sel` and
+    /// position values `u`: lane k of `out` becomes, bit for bit, what it returns for lane
+    /// k's values (other lanes are left as they are). The light is chosen lane by lane; area
     /// lights of constant radiance on flat triangles that are small seen from their lane and
     /// on spheres seen from outside, constant environments and environment maps are then
     /// sampled in lanes ([`crate::shape::LightTriangles`], [`crate::shape::LightSpheres`],
@@ -392,10 +371,11 @@ impl Scene {
     pub fn sample_emitter_directions(
         &self,
         active: u32,
-        ctx: &[LightContext; LIGHT_LANES],
-        u_sel: &[f32; LIGHT_LANES],
-        u: &[Vec2; LIGHT_LANES],
-        out: &mut [Option<EmitterSample>; LIGHT_LANES],
+        p: Vec3s,
+        n: Vec3s,
+        u_sel: f32x16,
+        u: Vector2<f32x16>,
+        out: &mut EmitterSampleLanes,
     ) {
         let mut triangles = LightTriangles::new();
         let mut spheres = LightSpheres::new();
@@ -406,111 +386,114 @@ impl Scene {
             },
             0.0,
         ); LIGHT_LANES];
-        let mut radiance = [Spectrum::ZERO; LIGHT_LANES];
-        // Lanes that chose a constant environment, and their sample values.
-        let (mut uniform, mut uniform_u) = (0u32, [[0.0; LIGHT_LANES]; 2]);
-        // Lanes that chose the environment map (`envmap`, an emitter index), and theirs.
-        let (mut mapped, mut mapped_u, mut envmap) = (0u32, [[0.0; LIGHT_LANES]; 2], None);
+        let mut pmf = f32x16::ONE;
+        let mut radiance = Vec3s::splat(Vec3::ZERO);
+        // Lanes that chose a constant environment.
+        let mut uniform = 0u32;
+        // Lanes that chose the environment map (`envmap`, an emitter index).
+        let (mut mapped, mut envmap) = (0u32, None);
         // Lanes whose light is sampled one lane at a time (in one place at the end, so that
         // the scalar sample is inlined once).
         let mut scalar = 0u32;
+        out.valid &= !active;
         for k in lanes_of(active) {
-            let Some((index, pmf)) = self.lights.sample(&ctx[k], u_sel[k]) else {
-                out[k] = None;
+            let ctx = LightContext {
+                p: p.lane(k),
+                n: n.lane(k),
+            };
+            let Some((index, prim_pmf)) = self.lights.sample(&ctx, u_sel.lane(k)) else {
                 continue;
             };
             let prim = self.lights.prim(index);
-            chosen[k] = (prim, pmf);
-            if let Emitter::Constant(light) = &self.emitters[prim.emitter as usize] {
-                uniform |= 1 << k;
-                (uniform_u[0][k], uniform_u[1][k]) = (u[k].x, u[k].y);
-                radiance[k] = light.radiance;
-                continue;
-            }
-            if let Emitter::Envmap(_) = &self.emitters[prim.emitter as usize] {
-                // (A scene has one environment: another map would go to the scalar code.)
-                if *envmap.get_or_insert(prim.emitter) == prim.emitter {
-                    mapped |= 1 << k;
-                    (mapped_u[0][k], mapped_u[1][k]) = (u[k].x, u[k].y);
+            chosen[k] = (prim, prim_pmf);
+            pmf.set_lane(k, prim_pmf);
+            match &self.emitters[prim.emitter as usize] {
+                Emitter::Constant(light) => {
+                    uniform |= 1 << k;
+                    radiance.set_lane(k, light.radiance);
                     continue;
                 }
-            }
-            if let Emitter::Area(light) = &self.emitters[prim.emitter as usize] {
-                if let Texture::Constant(c) = light.radiance {
-                    let shape = &self.shapes[light.shape as usize];
-                    let pushed = if let Some(t) = shape.flat_light_triangle(prim.face) {
-                        triangles.push(k, t, ctx[k].p, u[k]);
-                        true
-                    } else if let Some(sphere) = shape.light_sphere() {
-                        spheres.push(k, sphere, ctx[k].p, u[k]);
-                        true
-                    } else {
-                        false
-                    };
-                    if pushed {
-                        radiance[k] = c;
-                        continue;
+                // (A scene has one environment: another map would go to the scalar code.)
+                Emitter::Envmap(_) if *envmap.get_or_insert(prim.emitter) == prim.emitter => {
+                    mapped |= 1 << k;
+                    continue;
+                }
+                Emitter::Area(light) => {
+                    if let Texture::Constant(c) = light.radiance {
+                        let shape = &self.shapes[light.shape as usize];
+                        let pushed = if let Some(t) = shape.flat_light_triangle(prim.face) {
+                            triangles.push(k, t);
+                            true
+                        } else if let Some(sphere) = shape.light_sphere() {
+                            spheres.push(k, sphere);
+                            true
+                        } else {
+                            false
+                        };
+                        if pushed {
+                            radiance.set_lane(k, c);
+                            continue;
+                        }
                     }
                 }
+                _ => {}
             }
             scalar |= 1 << k;
         }
+        let zero = Vec3s::splat(Vec3::ZERO);
         if uniform != 0 {
-            let d = uniform_sphere_directions(&uniform_u);
-            for k in lanes_of(uniform) {
-                out[k] = Some(EmitterSample {
-                    d: Vec3::new(d[0][k], d[1][k], d[2][k]),
-                    dist: f32::INFINITY,
-                    p: Vec3::ZERO,
-                    n: Vec3::ZERO,
-                    p_error: Vec3::ZERO,
-                    pdf: warp::uniform_sphere_pdf() * chosen[k].1,
-                    radiance: radiance[k],
-                    is_delta: false,
-                });
-            }
+            let m = mask(uniform);
+            out.valid |= uniform;
+            out.delta &= !uniform;
+            out.d = Vec3s::select(m, uniform_sphere_directions(u), out.d);
+            out.dist = m.select(f32x16::splat(f32::INFINITY), out.dist);
+            out.p = Vec3s::select(m, zero, out.p);
+            out.n = Vec3s::select(m, zero, out.n);
+            out.p_error = Vec3s::select(m, zero, out.p_error);
+            out.pdf = m.select(f32x16::splat(warp::uniform_sphere_pdf()) * pmf, out.pdf);
+            out.radiance = Vec3s::select(m, radiance, out.radiance);
         }
         if let Some(Emitter::Envmap(map)) = envmap.map(|e| &self.emitters[e as usize]) {
-            map.sample_directions(mapped, &mapped_u, out);
+            let mut samples = [None; LIGHT_LANES];
+            map.sample_directions(mapped, &[u.x.to_array(), u.y.to_array()], &mut samples);
             for k in lanes_of(mapped) {
-                if let Some(es) = &mut out[k] {
+                if let Some(es) = &mut samples[k] {
                     es.pdf *= chosen[k].1;
                 }
+                out.set(k, samples[k].as_ref());
             }
         }
         for (lanes, samples) in [
             (
                 triangles.lanes(),
-                (triangles.lanes() != 0).then(|| triangles.sample()),
+                (triangles.lanes() != 0).then(|| triangles.sample(p, u)),
             ),
             (
                 spheres.lanes(),
-                (spheres.lanes() != 0).then(|| spheres.sample()),
+                (spheres.lanes() != 0).then(|| spheres.sample(p, u)),
             ),
         ] {
             let Some(s) = samples else { continue };
             scalar |= lanes & !s.done;
-            for k in lanes_of(lanes & s.done) {
-                let pmf = chosen[k].1;
-                out[k] = if s.valid & (1 << k) == 0 {
-                    None
-                } else {
-                    Some(EmitterSample {
-                        d: s.d(k),
-                        dist: s.dist[k],
-                        p: s.p(k),
-                        n: s.n(k),
-                        p_error: s.p_error(k),
-                        pdf: s.pdf[k] * pmf,
-                        radiance: radiance[k],
-                        is_delta: false,
-                    })
-                };
+            let valid = lanes & s.done & s.valid;
+            if valid == 0 {
+                continue;
             }
+            let m = mask(valid);
+            out.valid |= valid;
+            out.delta &= !valid;
+            out.d = Vec3s::select(m, s.d, out.d);
+            out.dist = m.select(s.dist, out.dist);
+            out.p = Vec3s::select(m, s.p, out.p);
+            out.n = Vec3s::select(m, s.n, out.n);
+            out.p_error = Vec3s::select(m, s.p_error, out.p_error);
+            out.pdf = m.select(s.pdf * pmf, out.pdf);
+            out.radiance = Vec3s::select(m, radiance, out.radiance);
         }
         for k in lanes_of(scalar) {
-            let (prim, pmf) = chosen[k];
-            out[k] = self.sample_light_prim(prim, pmf, ctx[k].p, u[k]);
+            let (prim, prim_pmf) = chosen[k];
+            let es = self.sample_light_prim(prim, prim_pmf, p.lane(k), u.lane(k));
+            out.set(k, es.as_ref());
         }
     }
 

@@ -1394,6 +1394,8 @@ fn sampling_weight_multiplies_a_bvh_leafs_odds() {
 fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
     use crate::lights::LIGHT_LANES;
     use crate::EmitterSample;
+    use radia_math::lanes::{f32x16, Vec3s};
+    use radia_math::real::Vector2;
     use rand::Rng;
     let mut rng = rand_pcg::Pcg32::new(3, 5);
     let shapes = vec![
@@ -1460,8 +1462,14 @@ fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
                     radiance: Vec3::ONE,
                     is_delta: true,
                 });
-                let mut out = [stale; LIGHT_LANES];
-                s.sample_emitter_directions(active, &ctx, &u_sel, &u, &mut out);
+                let mut out = crate::EmitterSampleLanes::new();
+                for k in 0..LIGHT_LANES {
+                    out.set(k, stale.as_ref());
+                }
+                let p = Vec3s::from_fn(|k| ctx[k].p);
+                let n = Vec3s::from_fn(|k| ctx[k].n);
+                let u_lanes = Vector2::from_fn(|k| u[k]);
+                s.sample_emitter_directions(active, p, n, f32x16::new(u_sel), u_lanes, &mut out);
                 for k in 0..LIGHT_LANES {
                     let want = if active & (1 << k) != 0 {
                         total += 1;
@@ -1469,7 +1477,7 @@ fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
                     } else {
                         stale
                     };
-                    assert_eq!(bits(&out[k]), bits(&want), "lane {k} from {:?}", ctx[k].p);
+                    assert_eq!(bits(&out.get(k)), bits(&want), "lane {k} from {:?}", ctx[k].p);
                     in_lanes += usize::from(want.is_some() && !want.unwrap().is_delta);
                 }
             }
@@ -1483,36 +1491,3 @@ fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
     );
 }
 
-#[test]
-fn lights_are_batched_only_where_every_one_is_sampled_in_lanes() {
-    let flat = || emitting(rectangle(0.5), Vec3::ONE);
-    let ball = || emitting(sphere(Vec3::new(2.0, 0.0, 1.0), 0.3, false), Vec3::ONE);
-    let env = || EmitterDesc::Constant {
-        radiance: Vec3::splat(0.1),
-    };
-    let bvh = LightSamplerKind::Bvh;
-    assert!(scene(vec![flat(), ball()], vec![], bvh).samples_lights_in_lanes());
-    assert!(scene(vec![flat()], vec![], bvh).samples_lights_in_lanes());
-    // Environment maps are sampled in lanes too; a constant environment is too, but
-    // batched beside the area lights it costs more than it saves.
-    assert!(!scene(vec![flat()], vec![env()], bvh).samples_lights_in_lanes());
-    let map = EmitterDesc::Envmap {
-        image: poles_image(),
-        scale: 1.0,
-        to_world: Affine3A::IDENTITY,
-        mis_compensation: false,
-    };
-    assert!(scene(vec![ball()], vec![map], bvh).samples_lights_in_lanes());
-    // A point light, a smooth-shaded mesh, a disk: some lanes would go one at a time.
-    let point = EmitterDesc::Point {
-        position: Vec3::new(0.0, 2.0, 0.0),
-        intensity: Vec3::ONE,
-    };
-    assert!(!scene(vec![flat()], vec![point], bvh).samples_lights_in_lanes());
-    assert!(
-        !scene(vec![flat(), emitting(smooth_cap(), Vec3::ONE)], vec![], bvh)
-            .samples_lights_in_lanes()
-    );
-    let round = emitting(disk(Vec3::ZERO, 0.4, Vec3::Z), Vec3::ONE);
-    assert!(!scene(vec![ball(), round], vec![], bvh).samples_lights_in_lanes());
-}

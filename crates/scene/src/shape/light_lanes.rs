@@ -14,9 +14,10 @@
 
 use super::lanes::triangle_point;
 use super::{LightTriangle, MAX_SPHERICAL_SAMPLE_AREA, MIN_SPHERICAL_SAMPLE_AREA};
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use radia_math::float::gamma;
 use radia_math::lanes::{self, f32x16, Vec3s, WIDTH};
+use radia_math::real::Vector2;
 use radia_math::INV_TWO_PI;
 
 type Rows = [[f32; WIDTH]; 3];
@@ -33,10 +34,6 @@ pub(crate) struct LightTriangles {
     centroid: Rows,
     area: [f32; WIDTH],
     r2: [f32; WIDTH],
-    /// The shading point the sample is seen from.
-    ref_p: Rows,
-    /// The sample values.
-    u: [[f32; WIDTH]; 2],
 }
 
 /// What [`LightTriangles::sample`] or [`LightSpheres::sample`] found: per lane, the fields of
@@ -48,37 +45,13 @@ pub(crate) struct LaneSamples {
     /// Of those, the lanes whose sample is valid (finite, positive density, seen from the
     /// front of the triangle: otherwise the scalar code returns no sample).
     pub valid: u32,
-    pub p: Rows,
-    pub p_error: Rows,
-    pub n: Rows,
-    pub d: Rows,
-    pub dist: [f32; WIDTH],
+    pub p: Vec3s,
+    pub p_error: Vec3s,
+    pub n: Vec3s,
+    pub d: Vec3s,
+    pub dist: f32x16,
     /// Solid-angle density (the choice of the light not included).
-    pub pdf: [f32; WIDTH],
-}
-
-impl LaneSamples {
-    #[inline(always)]
-    pub fn p(&self, k: usize) -> Vec3 {
-        row(&self.p, k)
-    }
-    #[inline(always)]
-    pub fn p_error(&self, k: usize) -> Vec3 {
-        row(&self.p_error, k)
-    }
-    #[inline(always)]
-    pub fn n(&self, k: usize) -> Vec3 {
-        row(&self.n, k)
-    }
-    #[inline(always)]
-    pub fn d(&self, k: usize) -> Vec3 {
-        row(&self.d, k)
-    }
-}
-
-#[inline(always)]
-fn row(rows: &Rows, k: usize) -> Vec3 {
-    Vec3::new(rows[0][k], rows[1][k], rows[2][k])
+    pub pdf: f32x16,
 }
 
 #[inline(always)]
@@ -96,8 +69,6 @@ impl LightTriangles {
             centroid: [[0.0; WIDTH]; 3],
             area: [1.0; WIDTH],
             r2: [0.0; WIDTH],
-            ref_p: [[0.0; WIDTH]; 3],
-            u: [[0.0; WIDTH]; 2],
         }
     }
 
@@ -107,9 +78,9 @@ impl LightTriangles {
         self.lanes
     }
 
-    /// Lane `k` samples triangle `t` from `ref_p` with the values `u`.
+    /// Lane `k` samples triangle `t`.
     #[inline(always)]
-    pub(crate) fn push(&mut self, k: usize, t: &LightTriangle, ref_p: Vec3, u: Vec2) {
+    pub(crate) fn push(&mut self, k: usize, t: &LightTriangle) {
         self.lanes |= 1 << k;
         for (rows, v) in self.v.iter_mut().zip(t.v) {
             set(rows, k, v);
@@ -119,16 +90,14 @@ impl LightTriangles {
         set(&mut self.centroid, k, t.centroid);
         self.area[k] = t.area;
         self.r2[k] = t.r2;
-        set(&mut self.ref_p, k, ref_p);
-        (self.u[0][k], self.u[1][k]) = (u.x, u.y);
     }
 
-    /// The samples of the pushed lanes: `spherical_sampling`'s choice, then, where it is
-    /// area sampling, `sample_position` and `seen_from` of `shape.rs` and the front-side
-    /// test of the area light, each operation as there.
+    /// The samples of the pushed lanes, seen from `ref_p` with the values `u`:
+    /// `spherical_sampling`'s choice, then, where it is area sampling, `sample_position` and
+    /// `seen_from` of `shape.rs` and the front-side test of the area light, each operation as
+    /// there.
     #[inline]
-    pub(crate) fn sample(&self) -> LaneSamples {
-        let ref_p = Vec3s::from_rows(&self.ref_p);
+    pub(crate) fn sample(&self, ref_p: Vec3s, u: Vector2<f32x16>) -> LaneSamples {
         let n = Vec3s::from_rows(&self.n);
 
         // ---- Which lanes are area-sampled (`spherical_sampling` returns `None`) ----
@@ -145,7 +114,7 @@ impl LightTriangles {
         let done = self.lanes & (far & !small).to_bitmask();
 
         // ---- `sample_position`: uniform on the triangle ----
-        let (u0, u1) = (f32x16::new(self.u[0]), f32x16::new(self.u[1]));
+        let (u0, u1) = (u.x, u.y);
         let t = (f32x16::ONE - u0).max(f32x16::ZERO).sqrt();
         let (b1, b2) = (f32x16::ONE - t, t * u1);
         let v0 = Vec3s::from_rows(&self.v[0]);
@@ -169,12 +138,12 @@ impl LightTriangles {
         LaneSamples {
             done,
             valid,
-            p: p.to_rows(),
-            p_error: p_error.to_rows(),
-            n: self.n,
-            d: d.to_rows(),
-            dist: dist.to_array(),
-            pdf: pdf.to_array(),
+            p,
+            p_error,
+            n,
+            d,
+            dist,
+            pdf,
         }
     }
 }
@@ -187,8 +156,6 @@ pub(crate) struct LightSpheres {
     center: Rows,
     radius: [f32; WIDTH],
     flipped: u32,
-    ref_p: Rows,
-    u: [[f32; WIDTH]; 2],
 }
 
 impl LightSpheres {
@@ -198,8 +165,6 @@ impl LightSpheres {
             center: [[0.0; WIDTH]; 3],
             radius: [0.0; WIDTH],
             flipped: 0,
-            ref_p: [[0.0; WIDTH]; 3],
-            u: [[0.0; WIDTH]; 2],
         }
     }
 
@@ -209,30 +174,20 @@ impl LightSpheres {
         self.lanes
     }
 
-    /// Lane `k` samples the sphere (`center`, `radius`, `flip_normals`) from `ref_p` with the
-    /// values `u`.
+    /// Lane `k` samples the sphere (`center`, `radius`, `flip_normals`).
     #[inline(always)]
-    pub(crate) fn push(
-        &mut self,
-        k: usize,
-        (center, radius, flip_normals): (Vec3, f32, bool),
-        ref_p: Vec3,
-        u: Vec2,
-    ) {
+    pub(crate) fn push(&mut self, k: usize, (center, radius, flip_normals): (Vec3, f32, bool)) {
         self.lanes |= 1 << k;
         set(&mut self.center, k, center);
         self.radius[k] = radius;
         self.flipped |= u32::from(flip_normals) << k;
-        set(&mut self.ref_p, k, ref_p);
-        (self.u[0][k], self.u[1][k]) = (u.x, u.y);
     }
 
-    /// The samples of the pushed lanes seen from outside their sphere, in the cone it
-    /// subtends.
+    /// The samples of the pushed lanes seen from `ref_p` outside their sphere, in the cone
+    /// it subtends, with the values `u`.
     #[inline]
-    pub(crate) fn sample(&self) -> LaneSamples {
+    pub(crate) fn sample(&self, ref_p: Vec3s, u: Vector2<f32x16>) -> LaneSamples {
         let center = Vec3s::from_rows(&self.center);
-        let ref_p = Vec3s::from_rows(&self.ref_p);
         let radius = f32x16::new(self.radius);
 
         // ---- `SphereCone::new` ----
@@ -246,7 +201,7 @@ impl LightSpheres {
         let pdf = f32x16::splat(INV_TWO_PI) / one_minus_cos_max;
 
         // ---- `SphereCone::sample` ----
-        let (u0, u1) = (f32x16::new(self.u[0]), f32x16::new(self.u[1]));
+        let (u0, u1) = (u.x, u.y);
         let omc = u0 * one_minus_cos_max;
         let cos_theta = f32x16::ONE - omc;
         let sin2_theta = omc * (f32x16::splat(2.0) - omc);
@@ -275,23 +230,23 @@ impl LightSpheres {
         let valid = done & (hit & front).to_bitmask();
 
         LaneSamples {
-            done: done,
+            done,
             valid,
-            p: p.to_rows(),
-            p_error: p_error.to_rows(),
-            n: n.to_rows(),
-            d: d.to_rows(),
-            dist: reach.to_array(),
-            pdf: pdf.to_array(),
+            p,
+            p_error,
+            n,
+            d,
+            dist: reach,
+            pdf,
         }
     }
 }
 
-/// `warp::square_to_uniform_sphere` of the values `u[0][lane]`, `u[1][lane]` in lanes: the
-/// directions a constant environment samples (`ConstantLight::sample_direction`).
+/// `warp::square_to_uniform_sphere` of the values `u` in lanes: the directions a constant
+/// environment samples (`ConstantLight::sample_direction`).
 #[inline]
-pub(crate) fn uniform_sphere_directions(u: &[[f32; WIDTH]; 2]) -> Rows {
-    let (u0, u1) = (f32x16::new(u[0]), f32x16::new(u[1]));
+pub(crate) fn uniform_sphere_directions(u: Vector2<f32x16>) -> Vec3s {
+    let (u0, u1) = (u.x, u.y);
     let z = f32x16::ONE - f32x16::splat(2.0) * u1;
     let r = (f32x16::ONE - z * z).max(f32x16::ZERO).sqrt();
     let (s, c) = lanes::sin_cos_turns(u0);
@@ -300,5 +255,4 @@ pub(crate) fn uniform_sphere_directions(u: &[[f32; WIDTH]; 2]) -> Rows {
         y: r * s,
         z,
     }
-    .to_rows()
 }
