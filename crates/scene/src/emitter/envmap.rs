@@ -502,8 +502,12 @@ mod tests {
                 let u: [[f32; WIDTH]; 2] =
                     std::array::from_fn(|_| std::array::from_fn(|_| value(&mut rng)));
                 let active = rng.random::<u32>() & 0xffff;
-                let mut out = [None; WIDTH];
-                e.sample_directions(active, &u, &mut out);
+                let mut out = crate::EmitterSampleLanes::new();
+                use radia_math::lanes::f32x16;
+                let pmf = f32x16::splat(1.0);
+                let u_lanes = radia_math::real::Vector2::new(f32x16::new(u[0]), f32x16::new(u[1]));
+                e.sample_directions(active, u_lanes, pmf, &mut out);
+                let out: [Option<EmitterSample>; WIDTH] = std::array::from_fn(|k| out.get(k));
                 for k in 0..WIDTH {
                     let want = (active & (1 << k) != 0)
                         .then(|| e.sample_direction(Vec2::new(u[0][k], u[1][k])))

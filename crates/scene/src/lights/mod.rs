@@ -454,14 +454,7 @@ impl Scene {
             out.radiance = Vec3s::select(m, radiance, out.radiance);
         }
         if let Some(Emitter::Envmap(map)) = envmap.map(|e| &self.emitters[e as usize]) {
-            let mut samples = [None; LIGHT_LANES];
-            map.sample_directions(mapped, &[u.x.to_array(), u.y.to_array()], &mut samples);
-            for k in lanes_of(mapped) {
-                if let Some(es) = &mut samples[k] {
-                    es.pdf *= chosen[k].1;
-                }
-                out.set(k, samples[k].as_ref());
-            }
+            map.sample_directions(mapped, u, pmf, out);
         }
         for (lanes, samples) in [
             (

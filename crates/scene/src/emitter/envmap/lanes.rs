@@ -10,28 +10,30 @@
 //! gives.
 
 use super::Envmap;
-use crate::emitter::EmitterSample;
+use crate::emitter::EmitterSampleLanes;
 use crate::lights::lanes_of;
 use glam::Vec3;
 use radia_math::lanes::{self, f32x16, Mat3s, Vec3s, WIDTH};
+use radia_math::real::Vector2;
 use radia_math::{Spectrum, INV_PI, INV_TWO_PI};
 use radia_sampling::warp;
 
 impl Envmap {
-    /// [`Envmap::sample_direction`] of `(u[0][k], u[1][k])` into `out[k]` for each lane k
-    /// set in `active`, bit for bit (the other lanes are left as they are).
+    /// [`Envmap::sample_direction`] of `(u.x[k], u.y[k])` into lane k of `out` for each lane
+    /// k set in `active`, bit for bit (the other lanes are left as they are), its density
+    /// multiplied by `pmf[k]` (the probability of having chosen the map).
     pub fn sample_directions(
         &self,
         active: u32,
-        u: &[[f32; WIDTH]; 2],
-        out: &mut [Option<EmitterSample>; WIDTH],
+        u: Vector2<f32x16>,
+        pmf: f32x16,
+        out: &mut EmitterSampleLanes,
     ) {
+        out.valid &= !active;
         let Some(rows) = self.rows.as_ref() else {
-            for k in lanes_of(active) {
-                out[k] = None;
-            }
             return;
         };
+        let u = [u.x.to_array(), u.y.to_array()];
         // ---- The cell of each lane: row, then column (alias tables, lane by lane) ----
         let mut sampled = 0u32;
         // The remapped sample values in the cell (s, t), its corner weights, its column
@@ -50,7 +52,6 @@ impl Envmap {
                 .as_ref()
                 .map(|columns| columns.sample(u[1][k]))
             else {
-                out[k] = None;
                 continue;
             };
             sampled |= 1 << k;
@@ -94,34 +95,34 @@ impl Envmap {
             z: -cos_phi * sin_theta,
         };
         let to_world = Mat3s::splat(self.to_world);
-        let d = to_world.mul_vec3(local).normalize().to_rows();
-        let pdf = (warp::lanes::bilerp([s, t], corners) * f32x16::splat(self.inv_total)).to_array();
+        let d = to_world.mul_vec3(local).normalize();
+        let pdf = warp::lanes::bilerp([s, t], corners) * f32x16::splat(self.inv_total);
         // Envmap::eval_cell.
         let (angle, computed) = lanes::atan2(sin_theta, cos_theta);
         let y = angle * f32x16::splat(INV_PI) * f32x16::splat((self.height - 1) as f32);
         let radiance = lerp_texels(&texels, s, clamp(y - v(&row_index), 0.0, 1.0));
-        let computed = computed.to_bitmask();
+        let computed = sampled & computed.to_bitmask();
 
-        for k in lanes_of(sampled) {
-            if computed & (1 << k) == 0 {
-                // An angle the scalar atan2 leaves to the C library (a NaN direction).
-                out[k] = self.sample_direction(glam::Vec2::new(u[0][k], u[1][k]));
-                continue;
+        // `sample_direction` returns no sample where the density is NaN or not positive.
+        let valid = computed & pdf.simd_gt(f32x16::ZERO).to_bitmask();
+        let m = lanes::mask(valid);
+        let zero = Vec3s::splat(Vec3::ZERO);
+        out.valid |= valid;
+        out.delta &= !valid;
+        out.d = Vec3s::select(m, d, out.d);
+        out.dist = m.select(f32x16::splat(f32::INFINITY), out.dist);
+        out.p = Vec3s::select(m, zero, out.p);
+        out.n = Vec3s::select(m, zero, out.n);
+        out.p_error = Vec3s::select(m, zero, out.p_error);
+        out.pdf = m.select(pdf * pmf, out.pdf);
+        out.radiance = Vec3s::select(m, Vec3s::from_rows(&radiance), out.radiance);
+        for k in lanes_of(sampled & !computed) {
+            // An angle the scalar atan2 leaves to the C library (a NaN direction).
+            let mut es = self.sample_direction(glam::Vec2::new(u[0][k], u[1][k]));
+            if let Some(es) = &mut es {
+                es.pdf *= pmf.as_array()[k];
             }
-            out[k] = if pdf[k].is_nan() || pdf[k] <= 0.0 {
-                None
-            } else {
-                Some(EmitterSample {
-                    d: Vec3::new(d[0][k], d[1][k], d[2][k]),
-                    dist: f32::INFINITY,
-                    p: Vec3::ZERO,
-                    n: Vec3::ZERO,
-                    p_error: Vec3::ZERO,
-                    pdf: pdf[k],
-                    radiance: Spectrum::new(radiance[0][k], radiance[1][k], radiance[2][k]),
-                    is_delta: false,
-                })
-            };
+            out.set(k, es.as_ref());
         }
     }
 
