@@ -108,6 +108,46 @@ pub fn unit_angle_z(v: Vec3s) -> (f32x16, f32x16) {
     (upper.select(angle, f32x16::splat(PI) - angle), ok)
 }
 
+/// `base[idx[k]]` in each lane k: one gather instruction (AVX-512, or two AVX2 ones), in
+/// place of sixteen loads written to memory one by one and read back as one vector (a load
+/// that waits for the sixteen stores). Panics if an index is out of bounds.
+#[inline(always)]
+pub fn gather(base: &[f32], idx: &[u32; WIDTH]) -> f32x16 {
+    let len = base.len();
+    assert!(idx.iter().fold(true, |ok, &i| ok & ((i as usize) < len)));
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
+    {
+        use std::arch::x86_64::*;
+        // SAFETY: AVX-512F is enabled at compile time; every index is within `base` (checked
+        // above) and scaled by 4, the size of an f32.
+        unsafe {
+            let vindex = _mm512_loadu_si512(idx.as_ptr() as *const _);
+            let v = _mm512_i32gather_ps::<4>(vindex, base.as_ptr() as *const _);
+            std::mem::transmute::<__m512, f32x16>(v)
+        }
+    }
+    #[cfg(all(
+        target_arch = "x86_64",
+        target_feature = "avx2",
+        not(target_feature = "avx512f")
+    ))]
+    {
+        use std::arch::x86_64::*;
+        // SAFETY: AVX2 is enabled at compile time; indices checked above, scaled by 4.
+        unsafe {
+            let lo = _mm256_loadu_si256(idx.as_ptr() as *const _);
+            let hi = _mm256_loadu_si256(idx.as_ptr().add(8) as *const _);
+            let a = _mm256_i32gather_ps::<4>(base.as_ptr(), lo);
+            let b = _mm256_i32gather_ps::<4>(base.as_ptr(), hi);
+            std::mem::transmute::<[__m256; 2], f32x16>([a, b])
+        }
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+    {
+        f32x16::new(std::array::from_fn(|k| base[idx[k] as usize]))
+    }
+}
+
 /// A mask with the lanes whose bits are set in `bits` (bit k: lane k).
 #[inline(always)]
 pub fn mask(bits: u32) -> f32x16 {
@@ -266,6 +306,25 @@ mod tests {
                 assert_eq!(finite & (1 << k) != 0, scalar_finite, "is_finite lane {k}");
             }
         }
+    }
+
+    #[test]
+    fn gather_reads_each_lanes_index() {
+        let base: Vec<f32> = (0..100).map(|i| i as f32 * 1.5 - 7.0).collect();
+        let idx: [u32; WIDTH] = std::array::from_fn(|k| ((k * 37 + 5) % 100) as u32);
+        let got = gather(&base, &idx).to_array();
+        for k in 0..WIDTH {
+            assert_eq!(got[k].to_bits(), base[idx[k] as usize].to_bits());
+        }
+    }
+
+    #[test]
+    #[should_panic]
+    fn gather_refuses_an_index_out_of_bounds() {
+        let base = [1.0f32; 8];
+        let mut idx = [0u32; WIDTH];
+        idx[9] = 8;
+        gather(&base, &idx);
     }
 
     #[test]

@@ -531,11 +531,17 @@ impl Accel {
         self.owners[prim]
     }
 
-    /// The vertices of triangle `prim` (the copy the traversal tests; NaN for an analytic
-    /// primitive).
+    /// The vertices of the triangles `prims[k]` in lanes (gathered from the copy the
+    /// traversal tests).
     #[inline(always)]
-    pub(crate) fn triangle(&self, prim: usize) -> [Vec3; 3] {
-        self.lanes.triangle(prim)
+    pub(crate) fn triangles(&self, prims: &[u32; 16]) -> [radia_math::lanes::Vec3s; 3] {
+        use radia_math::lanes::{gather, Vec3s};
+        let at = |a: usize| gather(self.lanes.coords(a), prims);
+        std::array::from_fn(|k| Vec3s {
+            x: at(3 * k),
+            y: at(3 * k + 1),
+            z: at(3 * k + 2),
+        })
     }
 
     /// Primitive `prim` (BVH order, as in [`Hit::prim`]): its shape and face, a triangle's

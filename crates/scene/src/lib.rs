@@ -183,14 +183,14 @@ impl Scene {
             let [shape, face] = self.accel.owner(prim);
             match &self.shapes[shape as usize].kind {
                 ShapeKind::Mesh(mesh) if MeshHits::takes(mesh) => {
-                    meshes.push(lane, mesh, shape, face, self.accel.triangle(prim));
+                    meshes.push(lane, mesh, shape, face, prim as u32);
                 }
                 kind @ ShapeKind::Sphere { .. } => spheres.push(lane, shape, kind),
                 kind @ ShapeKind::Disk { .. } => disks.push(lane, shape, kind),
                 _ => one_by_one |= 1 << lane,
             }
         }
-        one_by_one |= meshes.interactions(&hits, rays, out);
+        one_by_one |= meshes.interactions(&self.accel, &hits, rays, out);
         one_by_one |= spheres.interactions(&hits, rays, out);
         one_by_one |= disks.interactions(&hits, rays, out);
         while one_by_one != 0 {

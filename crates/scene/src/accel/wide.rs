@@ -409,6 +409,12 @@ impl TriangleLanes {
         Self { coords }
     }
 
+    /// Coordinate `a` (vertex a / 3, axis a % 3) of every primitive, by primitive.
+    #[inline(always)]
+    pub fn coords(&self, a: usize) -> &[f32] {
+        &self.coords[a]
+    }
+
     /// The vertices of triangle `i` (NaN for a primitive that is not one).
     #[inline(always)]
     pub fn triangle(&self, i: usize) -> [Vec3; 3] {

@@ -50,8 +50,8 @@ pub(super) fn triangle_point(
 pub(crate) struct MeshHits {
     /// Lanes pushed.
     lanes: u32,
-    /// Vertex k's coordinates: `v[k][axis][lane]`.
-    v: [Rows; 3],
+    /// The primitive each lane hit (0 in the others: a valid index to gather from).
+    prim: [u32; WIDTH],
     /// Lanes whose mesh has shading normals, and the normals of their three vertices.
     with_normals: u32,
     normals: [Rows; 3],
@@ -69,7 +69,7 @@ impl MeshHits {
     pub(crate) fn new() -> Self {
         Self {
             lanes: 0,
-            v: [[[0.0; WIDTH]; 3]; 3],
+            prim: [0; WIDTH],
             with_normals: 0,
             normals: [[[0.0; WIDTH]; 3]; 3],
             with_uvs: 0,
@@ -87,19 +87,15 @@ impl MeshHits {
         mesh.tangents.is_none()
     }
 
-    /// Lane `lane` hit triangle `face` of `mesh` (shape `shape`) with vertices `v` (the
-    /// BVH's copy, which the scalar code reads too).
+    /// Lane `lane` hit triangle `face` of `mesh` (shape `shape`), primitive `prim` of the
+    /// BVH (whose copy of the vertices the scalar code reads too).
     #[inline(always)]
-    pub(crate) fn push(&mut self, lane: usize, mesh: &Mesh, shape: u32, face: u32, v: [Vec3; 3]) {
+    pub(crate) fn push(&mut self, lane: usize, mesh: &Mesh, shape: u32, face: u32, prim: u32) {
         let bit = 1 << lane;
         self.lanes |= bit;
         self.shape[lane] = shape;
         self.face[lane] = face;
-        for k in 0..3 {
-            for axis in 0..3 {
-                self.v[k][axis][lane] = v[k][axis];
-            }
-        }
+        self.prim[lane] = prim;
         let idx = mesh.indices[face as usize];
         if let Some(ns) = &mesh.normals {
             self.with_normals |= bit;
@@ -129,6 +125,7 @@ impl MeshHits {
     #[inline(always)]
     pub(crate) fn interactions(
         &self,
+        accel: &crate::Accel,
         hits: &PacketHits,
         rays: &RayPacket,
         out: &mut SurfaceLanes,
@@ -136,7 +133,7 @@ impl MeshHits {
         if self.lanes == 0 {
             return 0;
         }
-        let v = self.v.map(|rows| Vec3s::from_rows(&rows));
+        let v = accel.triangles(&self.prim);
         let b1 = f32x16::new(hits.bary.map(|b| b.x));
         let b2 = f32x16::new(hits.bary.map(|b| b.y));
         let b0 = f32x16::ONE - b1 - b2;
