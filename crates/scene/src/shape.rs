@@ -7,7 +7,9 @@ mod light_lanes;
 
 pub(crate) use lanes::{DiskHits, MeshHits, SphereHits};
 pub use lanes::SurfaceLanes;
-pub(crate) use light_lanes::{uniform_sphere_directions, LightSpheres, LightTriangles};
+pub(crate) use light_lanes::{
+    uniform_sphere_directions, LightSpheres, LightTriangleTable, LightTriangles,
+};
 
 use crate::accel::{Hit, Primitive};
 use crate::description::{Geometry, Mesh};

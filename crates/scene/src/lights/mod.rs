@@ -24,7 +24,8 @@ pub use bvh::{BvhLight, LightBounds, LightBvh};
 
 use crate::emitter::{Emitter, EmitterSample, EmitterSampleLanes};
 use crate::shape::{
-    uniform_sphere_directions, LightSpheres, LightTriangles, Shape, ShapeKind, SurfaceInteraction,
+    uniform_sphere_directions, LightSpheres, LightTriangleTable, LightTriangles, Shape, ShapeKind,
+    SurfaceInteraction,
 };
 use crate::Scene;
 use glam::{Vec2, Vec3};
@@ -107,6 +108,8 @@ pub struct Lights {
     /// Index of the first light primitive of each emitter; its faces follow.
     first_prim: Vec<u32>,
     selector: Selector,
+    /// The flat triangles among the primitives, for light sampling in lanes.
+    triangles: LightTriangleTable,
 }
 
 #[derive(Clone, Debug)]
@@ -215,10 +218,17 @@ impl Lights {
                 LightBvh::build(&lights, bounded_weight).map_or(Selector::Empty, Selector::Bvh)
             }
         };
+        let triangles = LightTriangleTable::new(prims.iter().map(|p| {
+            match &emitters[p.emitter as usize] {
+                Emitter::Area(a) => shapes[a.shape as usize].flat_light_triangle(p.face),
+                _ => None,
+            }
+        }));
         Self {
             prims,
             first_prim,
             selector,
+            triangles,
         }
     }
 
@@ -421,8 +431,8 @@ impl Scene {
                 Emitter::Area(light) => {
                     if let Texture::Constant(c) = light.radiance {
                         let shape = &self.shapes[light.shape as usize];
-                        let pushed = if let Some(t) = shape.flat_light_triangle(prim.face) {
-                            triangles.push(k, t);
+                        let pushed = if shape.flat_light_triangle(prim.face).is_some() {
+                            triangles.push(k, index as u32);
                             true
                         } else if let Some(sphere) = shape.light_sphere() {
                             spheres.push(k, sphere);
@@ -459,7 +469,7 @@ impl Scene {
         for (lanes, samples) in [
             (
                 triangles.lanes(),
-                (triangles.lanes() != 0).then(|| triangles.sample(p, u)),
+                (triangles.lanes() != 0).then(|| triangles.sample(&self.lights.triangles, p, u)),
             ),
             (
                 spheres.lanes(),

@@ -16,7 +16,7 @@ use super::lanes::triangle_point;
 use super::{LightTriangle, MAX_SPHERICAL_SAMPLE_AREA, MIN_SPHERICAL_SAMPLE_AREA};
 use glam::Vec3;
 use radia_math::float::gamma;
-use radia_math::lanes::{self, f32x16, Vec3s, WIDTH};
+use radia_math::lanes::{self, f32x16, gather, Vec3s, WIDTH};
 use radia_math::real::Vector2;
 use radia_math::INV_TWO_PI;
 
@@ -24,16 +24,48 @@ type Rows = [[f32; WIDTH]; 3];
 
 const _: () = assert!(MIN_SPHERICAL_SAMPLE_AREA <= MAX_SPHERICAL_SAMPLE_AREA);
 
+/// The [`LightTriangle`]s of a scene's light primitives by field, indexed by light
+/// primitive (NaN for primitives that are not flat triangles): what [`LightTriangles`]
+/// gathers its lanes' triangles from.
+#[derive(Clone, Debug)]
+pub(crate) struct LightTriangleTable {
+    /// v0, v1, v2, twice_area_n, n, centroid (3 coordinates each), area, r2.
+    fields: [Vec<f32>; 20],
+}
+
+impl LightTriangleTable {
+    pub(crate) fn new<'a>(triangles: impl Iterator<Item = Option<&'a LightTriangle>>) -> Self {
+        let mut fields: [Vec<f32>; 20] = std::array::from_fn(|_| Vec::new());
+        for t in triangles {
+            let vectors = t.map_or([Vec3::NAN; 6], |t| {
+                [t.v[0], t.v[1], t.v[2], t.twice_area_n, t.n, t.centroid]
+            });
+            for (i, v) in vectors.iter().enumerate() {
+                for axis in 0..3 {
+                    fields[3 * i + axis].push(v[axis]);
+                }
+            }
+            fields[18].push(t.map_or(f32::NAN, |t| t.area));
+            fields[19].push(t.map_or(f32::NAN, |t| t.r2));
+        }
+        Self { fields }
+    }
+
+    #[inline(always)]
+    fn vector(&self, i: usize, index: &[u32; WIDTH]) -> Vec3s {
+        Vec3s {
+            x: gather(&self.fields[3 * i], index),
+            y: gather(&self.fields[3 * i + 1], index),
+            z: gather(&self.fields[3 * i + 2], index),
+        }
+    }
+}
+
 /// Light samples to draw on flat triangles, gathered lane by lane ([`LightTriangles::push`]).
 pub(crate) struct LightTriangles {
     lanes: u32,
-    /// Vertex k's coordinates: `v[k][axis][lane]`.
-    v: [Rows; 3],
-    twice_area_n: Rows,
-    n: Rows,
-    centroid: Rows,
-    area: [f32; WIDTH],
-    r2: [f32; WIDTH],
+    /// Each lane's light primitive (0 in the others: an index to gather from).
+    index: [u32; WIDTH],
 }
 
 /// What [`LightTriangles::sample`] or [`LightSpheres::sample`] found: per lane, the fields of
@@ -63,12 +95,7 @@ impl LightTriangles {
     pub(crate) fn new() -> Self {
         Self {
             lanes: 0,
-            v: [[[0.0; WIDTH]; 3]; 3],
-            twice_area_n: [[0.0; WIDTH]; 3],
-            n: [[0.0; WIDTH]; 3],
-            centroid: [[0.0; WIDTH]; 3],
-            area: [1.0; WIDTH],
-            r2: [0.0; WIDTH],
+            index: [0; WIDTH],
         }
     }
 
@@ -78,18 +105,11 @@ impl LightTriangles {
         self.lanes
     }
 
-    /// Lane `k` samples triangle `t`.
+    /// Lane `k` samples light primitive `index`, a flat triangle.
     #[inline(always)]
-    pub(crate) fn push(&mut self, k: usize, t: &LightTriangle) {
+    pub(crate) fn push(&mut self, k: usize, index: u32) {
         self.lanes |= 1 << k;
-        for (rows, v) in self.v.iter_mut().zip(t.v) {
-            set(rows, k, v);
-        }
-        set(&mut self.twice_area_n, k, t.twice_area_n);
-        set(&mut self.n, k, t.n);
-        set(&mut self.centroid, k, t.centroid);
-        self.area[k] = t.area;
-        self.r2[k] = t.r2;
+        self.index[k] = index;
     }
 
     /// The samples of the pushed lanes, seen from `ref_p` with the values `u`:
@@ -97,18 +117,24 @@ impl LightTriangles {
     /// `seen_from` of `shape.rs` and the front-side test of the area light, each operation as
     /// there.
     #[inline]
-    pub(crate) fn sample(&self, ref_p: Vec3s, u: Vector2<f32x16>) -> LaneSamples {
-        let n = Vec3s::from_rows(&self.n);
+    pub(crate) fn sample(
+        &self,
+        table: &LightTriangleTable,
+        ref_p: Vec3s,
+        u: Vector2<f32x16>,
+    ) -> LaneSamples {
+        let index = &self.index;
+        let n = table.vector(4, index);
 
         // ---- Which lanes are area-sampled (`spherical_sampling` returns `None`) ----
         // Only the far branch can say so without the exact solid angle; a lane nearer than
         // twice the circumradius, or whose estimate reaches the bound, goes to the scalar
         // code, which computes the exact angle (its result may still be area sampling).
-        let to_c = Vec3s::from_rows(&self.centroid) - ref_p;
+        let to_c = table.vector(5, index) - ref_p;
         let d2 = to_c.length_squared();
-        let r2 = f32x16::new(self.r2);
+        let r2 = gather(&table.fields[19], index);
         let far = d2.simd_gt(f32x16::splat(4.0) * r2);
-        let estimate = f32x16::splat(0.5) * Vec3s::from_rows(&self.twice_area_n).dot(to_c).abs()
+        let estimate = f32x16::splat(0.5) * table.vector(3, index).dot(to_c).abs()
             / (d2 * d2.sqrt());
         let small = estimate.simd_ge(f32x16::splat(MIN_SPHERICAL_SAMPLE_AREA));
         let done = self.lanes & (far & !small).to_bitmask();
@@ -117,11 +143,11 @@ impl LightTriangles {
         let (u0, u1) = (u.x, u.y);
         let t = (f32x16::ONE - u0).max(f32x16::ZERO).sqrt();
         let (b1, b2) = (f32x16::ONE - t, t * u1);
-        let v0 = Vec3s::from_rows(&self.v[0]);
-        let e1 = Vec3s::from_rows(&self.v[1]) - v0;
-        let e2 = Vec3s::from_rows(&self.v[2]) - v0;
+        let v0 = table.vector(0, index);
+        let e1 = table.vector(1, index) - v0;
+        let e2 = table.vector(2, index) - v0;
         let (p, p_error) = triangle_point(v0, e1, e2, b1, b2);
-        let pdf_area = f32x16::ONE / f32x16::new(self.area);
+        let pdf_area = f32x16::ONE / gather(&table.fields[18], index);
 
         // ---- `seen_from`: the density in solid angle ----
         let delta = p - ref_p;
