@@ -17,7 +17,7 @@ pub use discrete::DiscreteDistribution;
 pub use sampler::{
     hash4, mix64, unit_f32, AnySampler, IndependentSampler, LowDiscrepancySampler,
     MultijitterSampler, OrthogonalSampler, PixelKey, SampleStream, Sampler, SamplerKind,
-    SobolSampler, StratifiedSampler,
+    SobolSampler, StratifiedSampler, LANES,
 };
 
 /// Significance level of each chi-square test in this crate's own suite that is expected to

@@ -83,7 +83,29 @@ pub trait Sampler: Sync + Send {
     ) -> Option<[f32; 8]> {
         None
     }
+    /// [`Sampler::get_block`] for up to [`LANES`] samples at once, each with its own pixel
+    /// key, sample index, block and `prepared` (its [`Sampler::prepare`], also
+    /// [`SampleStream::prepared`]): for each lane `k` set in `lanes` (bit `k`), `out[j][k]`
+    /// becomes value `j` of `get_block(keys[k], indices[k], blocks[k], prepared[k])`, bit for
+    /// bit; the other lanes of `out` keep their values. A packet of paths then makes the
+    /// values of all its lanes' bounces in one call, by component. `false` (the default),
+    /// with `out` untouched, for samplers that make no blocks.
+    #[inline(always)]
+    fn get_block_lanes(
+        &self,
+        _lanes: u32,
+        _keys: &[PixelKey; LANES],
+        _indices: &[u32; LANES],
+        _blocks: &[u32; LANES],
+        _prepared: &[u64; LANES],
+        _out: &mut [[f32; LANES]; 8],
+    ) -> bool {
+        false
+    }
 }
+
+/// The samples [`Sampler::get_block_lanes`] makes at once: a packet's paths.
+pub const LANES: usize = 16;
 
 /// One pixel sample's walk through its dimensions.
 pub struct SampleStream<'a, S: ?Sized> {
@@ -122,6 +144,26 @@ impl<'a, S: Sampler + ?Sized> SampleStream<'a, S> {
         self.dim = 0;
         self.prepared = self.sampler.prepare(key, index);
         self.block = u32::MAX - 1;
+    }
+
+    /// The pixel this sample belongs to.
+    #[inline(always)]
+    pub fn key(&self) -> PixelKey {
+        self.key
+    }
+
+    /// The sample's index within its pixel.
+    #[inline(always)]
+    pub fn index(&self) -> u32 {
+        self.index
+    }
+
+    /// [`Sampler::prepare`] of this sample, made when the stream was (re)started: with
+    /// [`SampleStream::key`] and [`SampleStream::index`], what
+    /// [`Sampler::get_block_lanes`] takes for the stream's lane.
+    #[inline(always)]
+    pub fn prepared(&self) -> u64 {
+        self.prepared
     }
 
     /// Continues at dimension `dim` (the start of a block of the integrator's layout).

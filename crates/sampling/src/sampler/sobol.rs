@@ -19,39 +19,54 @@
 //! the Veach MIS scene and 4% less on the Cornell box at 256 spp, 64². Past 256 dimensions
 //! (about 30 bounces) each further group of 256 is an independently shuffled sequence.
 //!
+//! A packet of paths makes the blocks of its sixteen lanes in one call
+//! ([`Sampler::get_block_lanes`]), in 16-lane integer SIMD (`sobol/lanes.rs`), bit for bit
+//! the values of `get_block`.
+//!
 //! Any sample count works; powers of two are best. Beyond 2¹⁶ samples per pixel (the crate's
 //! longest sequence) each further run of 2¹⁶ samples uses independently scrambled points.
 
-use super::{mix64, PixelKey, Sampler};
+mod lanes;
+
+use super::{mix64, PixelKey, Sampler, LANES};
 use glam::Vec2;
 use sobol_burley::parts;
+use wide::{f32x16, u32x16, u32x8};
 
 #[derive(Clone, Debug)]
 pub struct SobolSampler {
     sample_count: u32,
     /// [`pair_nibbles`].
-    nibbles: &'static [[u32; 8]],
+    nibbles: &'static NibbleTable,
 }
 
+/// [`pair_nibbles`]: 64 sets of 64 rows of eight.
+type NibbleTable = [[[u32; 8]; 64]; 64];
+
 /// The crate's direction numbers regrouped for two consecutive dimension sets at once, four
-/// index bits per lookup: entry `64 set + 16 k + v` holds, for the eight dimensions
+/// index bits per lookup: entry `[set][16 k + v]` holds, for the eight dimensions
 /// `4 set .. 4 set + 8`, the XOR of the numbers that the bits of nibble value `v` at nibble
 /// `k` of the reversed sample index (counted from the top) select. So the Sobol point of a
 /// 16-bit index is four lookups XORed together, in place of one XOR per set bit. The number
 /// of bit b is read back from the crate as `sobol_rev(1 << (31 − b), dim)`, the Sobol point
-/// of an index with that one bit.
-fn pair_nibbles() -> &'static [[u32; 8]] {
-    static TABLE: std::sync::OnceLock<Vec<[u32; 8]>> = std::sync::OnceLock::new();
+/// of an index with that one bit. The last set, which has no next one, is zeros: a set
+/// taken modulo 64 then always reads inside the table (`get_block_lanes` does so for lanes
+/// whose values it discards).
+fn pair_nibbles() -> &'static NibbleTable {
+    static TABLE: std::sync::OnceLock<Box<NibbleTable>> = std::sync::OnceLock::new();
     TABLE.get_or_init(|| {
         let sets = sobol_burley::NUM_DIMENSION_SETS_4D;
         let direction = |set: u32, b: u32| -> [u32; 8] {
             std::array::from_fn(|l| parts::sobol_rev(1 << (31 - b), 4 * set + l as u32))
         };
-        let mut table = Vec::with_capacity(64 * (sets as usize - 1));
+        let mut table: Box<NibbleTable> = vec![[[0u32; 8]; 64]; sets as usize]
+            .into_boxed_slice()
+            .try_into()
+            .expect("sobol_burley has 64 dimension sets");
         for set in 0..sets - 1 {
             for k in 0..4u32 {
                 for v in 0..16u32 {
-                    let mut entry = [0u32; 8];
+                    let entry = &mut table[set as usize][(16 * k + v) as usize];
                     for j in 0..4 {
                         if v & (8 >> j) != 0 {
                             let d = direction(set, 4 * k + j);
@@ -60,7 +75,6 @@ fn pair_nibbles() -> &'static [[u32; 8]] {
                             }
                         }
                     }
-                    table.push(entry);
                 }
             }
         }
@@ -81,7 +95,7 @@ impl SobolSampler {
     /// bits for the two; bit for bit the same values.
     #[inline(always)]
     fn set_pair(&self, shuffled_rev_index: u32, set: u32, seed: u32) -> [f32; 8] {
-        let table = &self.nibbles[64 * set as usize..][..64];
+        let table = &self.nibbles[set as usize];
         let mut sobol = [0u32; 8];
         for k in 0..4 {
             let v = (shuffled_rev_index >> (28 - 4 * k)) & 0xf;
@@ -103,6 +117,39 @@ impl SobolSampler {
         let lo = finish([sobol[0], sobol[1], sobol[2], sobol[3]], set);
         let hi = finish([sobol[4], sobol[5], sobol[6], sobol[7]], set + 1);
         [lo[0], lo[1], lo[2], lo[3], hi[0], hi[1], hi[2], hi[3]]
+    }
+
+    /// [`SobolSampler::set_pair`] in sixteen lanes at once, lane `k` that of sample
+    /// `prepared[k]` (its seed and shuffled index, [`Sampler::prepare`]) and blocks
+    /// `blocks[k]` and `blocks[k] + 1`, by component: value `j` of every lane in `[j]`. Lanes
+    /// whose `block + 1` is not below [`sobol_burley::NUM_DIMENSION_SETS_4D`] (past the
+    /// first dimension group) hold meaningless values.
+    #[inline(always)]
+    fn set_pairs(&self, blocks: &[u32; LANES], prepared: &[u64; LANES]) -> [f32x16; 8] {
+        // Each lane's eight Sobol integers, XORed from the rows of its index's four nibbles
+        // in one 8-lane register, then turned by component. Lane by lane, not by gathers:
+        // with 32 gathers of 16 lanes (vpgatherdd, one per nibble and value) the call took
+        // 1.65× as long (bench `block_lanes`, AVX-512). Lanes past the group read set
+        // `block % 64`, inside the table.
+        let sobol: [u32x8; LANES] = std::array::from_fn(|k| {
+            let table = &self.nibbles[(blocks[k] & 63) as usize];
+            let index = prepared[k] as u32;
+            let row =
+                |n: u32| u32x8::new(table[(16 * n + ((index >> (28 - 4 * n)) & 0xf)) as usize]);
+            row(0) ^ row(1) ^ row(2) ^ row(3)
+        });
+        let sobol = lanes::transpose_16x8(sobol);
+        // The rest as `set_pair`, step for step over the lanes of each dimension.
+        let seed = lanes::high_halves(prepared) * u32x16::splat(0x9c8f_2d3b);
+        let block = u32x16::new(*blocks);
+        let lane = [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8];
+        std::array::from_fn(|j| {
+            let set = if j < 4 { block } else { block + u32x16::ONE };
+            let scramble = lanes::hash(seed ^ set ^ u32x16::splat(lane[j & 3]));
+            lanes::to_f32_norm(lanes::reverse_bits(lanes::owen_scramble_rev(
+                sobol[j], scramble,
+            )))
+        })
     }
 
     /// The seed of dimension group `block / 64` (256 dimensions) of sample `index`: hashed
@@ -179,6 +226,46 @@ impl Sampler for SobolSampler {
             );
             [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]]
         })
+    }
+
+    /// The lanes of the first dimension group together, in 16-lane integer SIMD
+    /// (`SobolSampler::set_pairs`); lanes past it one by one as `get_block`.
+    #[inline]
+    fn get_block_lanes(
+        &self,
+        lanes: u32,
+        keys: &[PixelKey; LANES],
+        indices: &[u32; LANES],
+        blocks: &[u32; LANES],
+        prepared: &[u64; LANES],
+        out: &mut [[f32; LANES]; 8],
+    ) -> bool {
+        let sets = sobol_burley::NUM_DIMENSION_SETS_4D;
+        let first = u32x16::new(*blocks)
+            .simd_lt(u32x16::splat(sets - 1))
+            .to_bitmask();
+        let simd = first & lanes;
+        if simd != 0 {
+            let values = self.set_pairs(blocks, prepared);
+            let bit = u32x16::new(std::array::from_fn(|k| 1 << k));
+            let simd = (u32x16::splat(simd) & bit).simd_eq(bit);
+            for (row, v) in out.iter_mut().zip(values) {
+                let old = u32x16::new(row.map(f32::to_bits));
+                *row = f32x16::from_bits(simd.select(v.to_bits(), old)).to_array();
+            }
+        }
+        let mut past = !first & lanes & 0xffff;
+        while past != 0 {
+            let k = past.trailing_zeros() as usize;
+            past &= past - 1;
+            let v = self
+                .get_block(keys[k], indices[k], blocks[k], prepared[k])
+                .expect("the sobol sampler makes blocks");
+            for (row, v) in out.iter_mut().zip(v) {
+                row[k] = v;
+            }
+        }
+        true
     }
 
     #[inline]

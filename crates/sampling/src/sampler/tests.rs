@@ -668,3 +668,94 @@ fn samples_past_the_sample_count_stay_valid() {
         });
     }
 }
+
+/// `get_block_lanes` is `get_block` in every lane it is asked for, bit for bit, and leaves
+/// the other lanes alone: random pixel keys, sample indices (below 2¹⁶, about the runs'
+/// boundaries and anywhere), blocks (the whole first dimension group with its last blocks,
+/// the first blocks past it, later groups) and lane subsets.
+#[test]
+fn sobol_block_lanes_are_get_block_in_each_lane() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_pcg::Pcg32::seed_from_u64(11);
+    let s = SobolSampler::new(64);
+    let sets = sobol_burley::NUM_DIMENSION_SETS_4D;
+    let (mut simd, mut past) = (0u32, 0u32);
+    for round in 0..20_000 {
+        let keys: [PixelKey; LANES] = std::array::from_fn(|_| PixelKey(rng.random()));
+        let indices: [u32; LANES] = std::array::from_fn(|_| match rng.random_range(0..4) {
+            0 => rng.random_range(0..64),
+            1 => rng.random_range(0..1 << 16),
+            2 => (rng.random_range(1..64u32) << 16).wrapping_add(rng.random_range(0..4)) - 2,
+            _ => rng.random(),
+        });
+        let blocks: [u32; LANES] = std::array::from_fn(|_| match rng.random_range(0..6) {
+            0 => sets - 2,
+            1 => sets - 1 + rng.random_range(0..3),
+            2 => rng.random_range(sets..1 << 12),
+            _ => rng.random_range(0..sets - 1),
+        });
+        let lanes = match round % 4 {
+            0 => 0xffff,
+            // Bits past the sixteenth mean nothing.
+            1 => rng.random::<u32>(),
+            _ => rng.random::<u32>() & rng.random::<u32>() & 0xffff,
+        };
+        let prepared = std::array::from_fn(|k| s.prepare(keys[k], indices[k]));
+        let before: [[u32; LANES]; 8] = std::array::from_fn(|_| rng.random());
+        let mut out = before.map(|row| row.map(f32::from_bits));
+        assert!(s.get_block_lanes(lanes, &keys, &indices, &blocks, &prepared, &mut out));
+        for k in 0..LANES {
+            let got: [u32; 8] = std::array::from_fn(|j| out[j][k].to_bits());
+            if lanes & (1 << k) == 0 {
+                assert_eq!(
+                    got,
+                    std::array::from_fn(|j| before[j][k]),
+                    "lane {k} changed"
+                );
+                continue;
+            }
+            let want = s
+                .get_block(keys[k], indices[k], blocks[k], prepared[k])
+                .unwrap()
+                .map(f32::to_bits);
+            assert_eq!(
+                got, want,
+                "lane {k}: key {:?}, index {}, block {}",
+                keys[k], indices[k], blocks[k]
+            );
+            if blocks[k] + 1 < sets {
+                simd += 1;
+            } else {
+                past += 1;
+            }
+        }
+    }
+    // Both branches well exercised.
+    assert!(
+        simd > 100_000 && past > 50_000,
+        "{simd} lanes in the group, {past} past it"
+    );
+}
+
+/// Samplers that make no blocks make no lanes of blocks either, and leave `out` alone.
+#[test]
+fn samplers_without_blocks_make_no_block_lanes() {
+    for kind in every_kind() {
+        let any = AnySampler::new(kind, 16);
+        let key = keys()[1];
+        let keys = [key; LANES];
+        let indices: [u32; LANES] = std::array::from_fn(|k| k as u32);
+        let blocks = [1; LANES];
+        let mut out = [[0.25f32; LANES]; 8];
+        let made = crate::with_sampler!(&any, s => {
+            let prepared = std::array::from_fn(|k| s.prepare(key, indices[k]));
+            let made = s.get_block_lanes(0xffff, &keys, &indices, &blocks, &prepared, &mut out);
+            assert_eq!(made, s.get_block(key, 0, 1, prepared[0]).is_some(), "{kind:?}");
+            made
+        });
+        assert_eq!(made, kind == SamplerKind::Sobol, "{kind:?}");
+        if !made {
+            assert_eq!(out, [[0.25f32; LANES]; 8], "{kind:?} wrote to out");
+        }
+    }
+}
