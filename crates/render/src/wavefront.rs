@@ -26,7 +26,7 @@ use radia_math::lanes::{f32x16, Vec3s};
 use radia_math::real::{Mask, Real, Vector2, Vector3};
 use radia_math::{Ray, Spectrum};
 use radia_sampling::mis::power_heuristic_r;
-use radia_sampling::{SampleStream, Sampler};
+use radia_sampling::{PixelKey, SampleStream, Sampler};
 use radia_scene::{
     EmitterSampleLanes, RayPacket, Scene, ShadowLanes, SurfaceLanes, PACKET_LANES,
 };
@@ -45,6 +45,11 @@ struct Paths<'a, S> {
     pos: [Vec2; LANES],
     rays: [u32; LANES],
     stream: [SampleStream<'a, S>; LANES],
+    /// Each lane's stream's pixel, sample index and `Sampler::prepare`, for the samplers
+    /// that make the values of all lanes at once (`Sampler::get_block_lanes`).
+    key: [PixelKey; LANES],
+    index: [u32; LANES],
+    prepared: [u64; LANES],
     depth: [u32; LANES],
     ray_o: Vec3s,
     ray_d: Vec3s,
@@ -70,6 +75,9 @@ impl<'a, S: Sampler> Paths<'a, S> {
             pos: [Vec2::ZERO; LANES],
             rays: [0; LANES],
             stream: std::array::from_fn(stream),
+            key: [PixelKey(0); LANES],
+            index: [0; LANES],
+            prepared: [0; LANES],
             depth: [0; LANES],
             ray_o: zero,
             ray_d: zero,
@@ -213,6 +221,9 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
             next += 1;
             (films[0][k], films[1][k]) = (film.x, film.y);
             fresh |= 1 << k;
+            let stream = &paths.stream[k];
+            (paths.key[k], paths.index[k]) = (stream.key(), stream.index());
+            paths.prepared[k] = stream.prepared();
             paths.slot[k] = next - 1;
             paths.pos[k] = pos;
             paths.rays[k] = 0;
@@ -309,6 +320,9 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
             }
         }
 
+        // ---- The sample values of the bounces, all lanes at once where the sampler can ----
+        let values = bounce_values(&paths, going);
+
         // ---- Next-event estimation, sixteen at once ----
         // The shading points of the lane models: uv only (none of them reads the surface's
         // tangents, `Bsdf::reads_surface_frame`).
@@ -327,12 +341,22 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
                 continue;
             }
             asks |= 1 << k;
+            if values.is_some() {
+                continue;
+            }
             // `PathIntegrator::light_values`.
             let stream = &mut paths.stream[k];
             stream.seek(layout::bounce(paths.depth[k]) + layout::LIGHT_POSITION);
             u.set_lane(k, stream.next_2d());
             if choice_uses_sample {
                 u_sel.set_lane(k, stream.next_1d());
+            }
+        }
+        if let Some(v) = &values {
+            use layout::{LIGHT_CHOICE, LIGHT_POSITION};
+            u = Vector2::new(v[LIGHT_POSITION as usize], v[LIGHT_POSITION as usize + 1]);
+            if choice_uses_sample {
+                u_sel = v[LIGHT_CHOICE as usize];
             }
         }
         if asks != 0 {
@@ -357,7 +381,16 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
 
         // ---- BSDF sampling, sixteen at once ----
         if going != 0 {
-            ends |= scatter(scene, &its, &sp, &bsdf_of, going, integrator, &mut paths);
+            ends |= scatter(
+                scene,
+                &its,
+                &sp,
+                &bsdf_of,
+                going,
+                values.as_ref(),
+                integrator,
+                &mut paths,
+            );
         }
 
         // ---- The lanes that step one path at a time ----
@@ -414,6 +447,24 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         }
         paths.live &= !ends;
     }
+}
+
+/// The eight values of the bounce blocks of `lanes` (`layout::bounce` of each lane's
+/// depth), value j of lane k in `[j]`, made for all lanes at once by samplers that can
+/// (`Sampler::get_block_lanes`); `None` for the others, whose values are drawn lane by lane
+/// from the streams.
+#[inline(always)]
+fn bounce_values<S: Sampler>(paths: &Paths<'_, S>, lanes: u32) -> Option<[f32x16; 8]> {
+    if lanes == 0 {
+        return None;
+    }
+    const _: () = assert!(layout::BOUNCES % 4 == 0 && layout::BOUNCE_DIMS == 8);
+    let blocks = paths.depth.map(|d| layout::bounce(d) / 4);
+    let mut out = [[0.0; LANES]; 8];
+    let sampler = paths.stream[0].sampler();
+    sampler
+        .get_block_lanes(lanes, &paths.key, &paths.index, &blocks, &paths.prepared, &mut out)
+        .then(|| out.map(f32x16::new))
 }
 
 /// The environment's emission along the rays of `lanes`, which escaped the scene
@@ -557,27 +608,41 @@ fn estimates<S: Sampler>(
 /// BSDF sampling and Russian roulette for `lanes` (the end of `PathIntegrator::bounce` in
 /// lanes): the next rays of the paths that go on; returns the lanes whose paths end.
 #[inline(never)]
+#[allow(clippy::too_many_arguments)]
 fn scatter<S: Sampler>(
     scene: &Scene,
     its: &SurfaceLanes,
     sp: &ShadingPointR<f32x16>,
     bsdf_of: &[u32; LANES],
     lanes: u32,
+    values: Option<&[f32x16; 8]>,
     integrator: &PathIntegrator,
     paths: &mut Paths<'_, S>,
 ) -> u32 {
-    // The sample values, lane by lane from each path's stream.
+    // The sample values: of all lanes at once, or lane by lane from each path's stream.
+    // A value nothing reads is not drawn from a stream (the layout fixes every other one);
+    // made with the others, it is replaced by the one-path code's 0.5.
     let mut u1 = f32x16::splat(0.5);
     let mut u2 = Vector2::new(f32x16::ZERO, f32x16::ZERO);
+    let mut lobe_lanes = 0u32;
     for k in lanes_of(lanes) {
+        let samples_lobe = scene.bsdfs[bsdf_of[k] as usize].samples_lobe();
+        lobe_lanes |= u32::from(samples_lobe) << k;
+        if values.is_some() {
+            continue;
+        }
         let stream = &mut paths.stream[k];
         let block = layout::bounce(paths.depth[k]);
         stream.seek(block + layout::BSDF_DIRECTION);
         u2.set_lane(k, stream.next_2d());
-        // A value nothing reads is not drawn (the layout fixes every other one).
-        if scene.bsdfs[bsdf_of[k] as usize].samples_lobe() {
+        if samples_lobe {
             u1.set_lane(k, stream.next_1d());
         }
+    }
+    if let Some(v) = values {
+        use layout::{BSDF_DIRECTION, BSDF_LOBE};
+        u2 = Vector2::new(v[BSDF_DIRECTION as usize], v[BSDF_DIRECTION as usize + 1]);
+        u1 = mask(lobe_lanes).select(v[BSDF_LOBE as usize], u1);
     }
     let zero3 = Vec3s::splat(Vec3::ZERO);
     let mut wo = zero3;
@@ -620,14 +685,16 @@ fn scatter<S: Sampler>(
     let beta_max = paths.beta.max_element();
     let q = (beta_max * paths.eta * paths.eta).min(f32x16::splat(0.95));
     let mut roulette = 0u32;
-    let mut u = f32x16::ZERO;
+    let mut u = values.map_or(f32x16::ZERO, |v| v[layout::ROULETTE as usize]);
     for k in lanes_of(on) {
         paths.depth[k] += 1;
         if paths.depth[k] >= integrator.rr_depth {
             roulette |= 1 << k;
-            let stream = &mut paths.stream[k];
-            stream.seek(layout::bounce(paths.depth[k] - 1) + layout::ROULETTE);
-            u.set_lane(k, stream.next_1d());
+            if values.is_none() {
+                let stream = &mut paths.stream[k];
+                stream.seek(layout::bounce(paths.depth[k] - 1) + layout::ROULETTE);
+                u.set_lane(k, stream.next_1d());
+            }
         }
     }
     let survive = u.less(q).bits();

@@ -166,6 +166,12 @@ impl<'a, S: Sampler + ?Sized> SampleStream<'a, S> {
         self.prepared
     }
 
+    /// The sampler the stream draws from.
+    #[inline(always)]
+    pub fn sampler(&self) -> &'a S {
+        self.sampler
+    }
+
     /// Continues at dimension `dim` (the start of a block of the integrator's layout).
     #[inline]
     pub fn seek(&mut self, dim: u32) {
