@@ -374,8 +374,13 @@ mod kernel {
         /// The watertight frame: o[k_j] and the shear s_j per lane.
         ok: [F16; 3],
         s: [F16; 3],
-        /// `ksel[j][a]`: lanes whose k_j is axis a (a = 0, 1; the rest have axis 2).
+        /// `ksel[j][a]`: lanes whose k_j is axis a (a = 0, 1; the rest have axis 2), as masks
+        /// and as bits.
         ksel: [[M16; 2]; 3],
+        ksel_bits: [[u16; 2]; 3],
+        /// `s` and `inv` by lane, for the tests done one lane at a time.
+        s_lanes: [[f32; PACKET_LANES]; 3],
+        inv_lanes: [[f32; PACKET_LANES]; 3],
         /// The rays, for the tests done one lane at a time.
         packet: &'a RayPacket,
     }
@@ -412,6 +417,16 @@ mod kernel {
             let ky = [(kz1 & !swap) | (kz2 & swap), (kz2 & !swap) | (kz0 & swap)];
             let kz = [kz0, kz1];
             let sz = one / dz;
+            let s = [select3(kx, d) * sz, select3(ky, d) * sz, sz];
+            let mut s_lanes = [[0.0; PACKET_LANES]; 3];
+            for (lanes, v) in s_lanes.iter_mut().zip(s) {
+                v.store_where(lanes, 0xffff);
+            }
+            let ksel = [kx, ky, kz];
+            let mut inv_lanes = [[0.0; PACKET_LANES]; 3];
+            for (lanes, v) in inv_lanes.iter_mut().zip(inv) {
+                v.store_where(lanes, 0xffff);
+            }
             Self {
                 o,
                 inv,
@@ -419,9 +434,41 @@ mod kernel {
                 neg,
                 neg_bits: neg.map(|m| m.bits()),
                 ok: [select3(kx, o), select3(ky, o), select3(kz, o)],
-                s: [select3(kx, d) * sz, select3(ky, d) * sz, sz],
-                ksel: [kx, ky, kz],
+                s,
+                ksel,
+                ksel_bits: ksel.map(|m| m.map(|m| m.bits())),
+                s_lanes,
+                inv_lanes,
                 packet: p,
+            }
+        }
+
+        /// Lane `l`'s `wide::NodeRay::new`, its 1 / d read from the lanes (the same
+        /// division).
+        #[inline(always)]
+        fn node_ray(&self, l: usize) -> wide::NodeRay {
+            let p = self.packet;
+            let inv = &self.inv_lanes;
+            wide::NodeRay::with_inverse(
+                Vec3::new(p.o[0][l], p.o[1][l], p.o[2][l]),
+                glam::Vec3A::new(inv[0][l], inv[1][l], inv[2][l]),
+            )
+        }
+
+        /// Lane `l`'s `WatertightRay::new`, read from the lanes (the same comparisons,
+        /// division and products, so the same values) rather than made again, with its axis
+        /// choices' branches, at every leaf a lane tests alone.
+        #[inline(always)]
+        fn watertight(&self, l: usize) -> WatertightRay {
+            let axis = |j: usize| {
+                let bit = |a: usize| ((self.ksel_bits[j][a] >> l) & 1) as usize;
+                2 - 2 * bit(0) - bit(1)
+            };
+            let p = self.packet;
+            WatertightRay {
+                o: Vec3::new(p.o[0][l], p.o[1][l], p.o[2][l]),
+                k: [axis(0), axis(1), axis(2)],
+                s: [self.s_lanes[0][l], self.s_lanes[1][l], self.s_lanes[2][l]],
             }
         }
 
@@ -647,7 +694,7 @@ mod kernel {
             let ray = r.ray(l);
             if let Some((t, bary, inner)) = accel.intersect_prim(
                 shapes,
-                &WatertightRay::new(&ray),
+                &r.watertight(l),
                 &ray,
                 prim,
                 st.t[l],
@@ -670,8 +717,8 @@ mod kernel {
         l: usize,
     ) {
         let ray = &r.ray(l);
-        let wray = &WatertightRay::new(ray);
-        let node_ray = wide::NodeRay::new(ray.o, ray.d);
+        let wray = &r.watertight(l);
+        let node_ray = r.node_ray(l);
         let mut found = Found {
             bary: Vec2::ZERO,
             inner: 0,
@@ -713,7 +760,7 @@ mod kernel {
         };
         if let Some((prim, t)) = accel.intersect_leaves(
             shapes,
-            &WatertightRay::new(&ray),
+            &r.watertight(l),
             &ray,
             base,
             mask,

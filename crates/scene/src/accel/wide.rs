@@ -45,7 +45,13 @@ impl NodeRay {
     /// every node.
     #[inline(always)]
     pub fn new(o: Vec3, d: Vec3) -> Self {
-        let inv_dir = Vec3A::ONE / Vec3A::from(d);
+        Self::with_inverse(o, Vec3A::ONE / Vec3A::from(d))
+    }
+
+    /// [`NodeRay::new`] given `inv_dir` = 1 / d, computed already (the packet traversal's
+    /// lanes hold it).
+    #[inline(always)]
+    pub fn with_inverse(o: Vec3, inv_dir: Vec3A) -> Self {
         let neg = [inv_dir.x < 0.0, inv_dir.y < 0.0, inv_dir.z < 0.0];
         let oct_inv4 = (if neg[0] { 0 } else { 0x0404_0404 })
             | (if neg[1] { 0 } else { 0x0202_0202 })
