@@ -103,6 +103,11 @@ pub trait Real:
     fn floor(self) -> Self;
     /// `self` with its sign bit flipped where `m` holds.
     fn negate_where(self, m: Self::Mask) -> Self;
+    /// e^x, as glibc's `expf` computes it ([`crate::special`]): `f32::exp` bit for bit on
+    /// x86-64 glibc with FMA, without its call.
+    fn exp(self) -> Self;
+    /// ln x, as glibc's `logf` computes it ([`crate::special`]).
+    fn ln(self) -> Self;
 
     #[inline(always)]
     fn zero() -> Self {
@@ -238,6 +243,14 @@ impl Real for f32 {
     fn negate_where(self, m: bool) -> Self {
         f32::from_bits(self.to_bits() ^ ((m as u32) << 31))
     }
+    #[inline(always)]
+    fn exp(self) -> Self {
+        crate::special::exp(self, crate::special::exp_kernel::<f32>)
+    }
+    #[inline(always)]
+    fn ln(self) -> Self {
+        crate::special::ln(self, crate::special::ln_kernel_f32)
+    }
 }
 
 /// The masks of `f32x16` are `f32x16` lanes of all ones or all zeros, as the `wide` crate's
@@ -362,6 +375,14 @@ impl Real for f32x16 {
     #[inline(always)]
     fn negate_where(self, m: Self) -> Self {
         self ^ (m & f32x16::splat(-0.0))
+    }
+    #[inline(always)]
+    fn exp(self) -> Self {
+        crate::special::exp(self, crate::special::exp_kernel_f32x16)
+    }
+    #[inline(always)]
+    fn ln(self) -> Self {
+        crate::special::ln(self, crate::special::ln_kernel_f32x16)
     }
 }
 
@@ -683,7 +704,9 @@ mod tests {
             );
             type Op = fn(f32x16, f32x16, f32x16) -> f32x16;
             type Sop = fn(f32, f32, f32) -> f32;
-            let ops: [(&str, Op, Sop); 14] = [
+            let ops: [(&str, Op, Sop); 16] = [
+                ("exp", |a, _, _| Real::exp(a), |a, _, _| Real::exp(a)),
+                ("ln", |a, _, _| Real::ln(a), |a, _, _| Real::ln(a)),
                 ("sqrt", |a, _, _| Real::sqrt(a), |a, _, _| Real::sqrt(a)),
                 ("abs", |a, _, _| Real::abs(a), |a, _, _| Real::abs(a)),
                 ("min", |a, b, _| Real::min(a, b), |a, b, _| Real::min(a, b)),
