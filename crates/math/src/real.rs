@@ -651,6 +651,71 @@ impl<R: Real> FrameR<R> {
     }
 }
 
+/// Values that [`Real::select`] chooses between lane by lane: reals, vectors of them, and
+/// tuples of these.
+pub trait Select<R: Real>: Sized {
+    fn select(m: R::Mask, if_true: Self, if_false: Self) -> Self;
+}
+
+impl<R: Real> Select<R> for R {
+    #[inline(always)]
+    fn select(m: R::Mask, if_true: Self, if_false: Self) -> Self {
+        R::select(m, if_true, if_false)
+    }
+}
+
+impl<R: Real> Select<R> for Vector2<R> {
+    #[inline(always)]
+    fn select(m: R::Mask, if_true: Self, if_false: Self) -> Self {
+        Vector2::select(m, if_true, if_false)
+    }
+}
+
+impl<R: Real> Select<R> for Vector3<R> {
+    #[inline(always)]
+    fn select(m: R::Mask, if_true: Self, if_false: Self) -> Self {
+        Vector3::select(m, if_true, if_false)
+    }
+}
+
+impl<R: Real, A: Select<R>, B: Select<R>> Select<R> for (A, B) {
+    #[inline(always)]
+    fn select(m: R::Mask, t: Self, f: Self) -> Self {
+        (A::select(m, t.0, f.0), B::select(m, t.1, f.1))
+    }
+}
+
+impl<R: Real, A: Select<R>, B: Select<R>, C: Select<R>> Select<R> for (A, B, C) {
+    #[inline(always)]
+    fn select(m: R::Mask, t: Self, f: Self) -> Self {
+        (
+            A::select(m, t.0, f.0),
+            B::select(m, t.1, f.1),
+            C::select(m, t.2, f.2),
+        )
+    }
+}
+
+/// `select(m, if_true(), if_false())`, computing only the sides some lane takes: for one
+/// path (`f32`, a `bool` mask) a branch, as the scalar code had; for lanes both sides only
+/// where the lanes disagree. Each lane gets what [`Select::select`] of both sides gives it,
+/// so this is for costly sides (a lobe's sampling, a two-sided model's side); for cheap
+/// ones, and coin tosses a branch would mispredict, [`Real::select`] computes both.
+#[inline(always)]
+pub fn select_lazy<R: Real, T: Select<R>>(
+    m: R::Mask,
+    if_true: impl FnOnce() -> T,
+    if_false: impl FnOnce() -> T,
+) -> T {
+    if m.all() {
+        if_true()
+    } else if !m.any() {
+        if_false()
+    } else {
+        T::select(m, if_true(), if_false())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -56,14 +56,14 @@ const EXP_T: [u64; 32] = [
     0x3fefd0765b6e4540,
 ];
 /// 32/ln 2 (`invln2_scaled`).
-const EXP_INV_LN2_N: f64 = f64::from_bits(0x404715476_52b82fe);
+const EXP_INV_LN2_N: f64 = f64::from_bits(0x4047_1547_652b_82fe);
 /// 1.5·2^52: adding it rounds to an integer, left in the low bits (`shift`).
 const EXP_SHIFT: f64 = f64::from_bits(0x4338000000000000);
 /// The polynomial of 2^(r/32) − 1 (`poly_scaled`).
 const EXP_C: [f64; 3] = [
-    f64::from_bits(0x3eb_c6af84b912394),
-    f64::from_bits(0x3f2_ebfce50fac4f3),
-    f64::from_bits(0x3f9_62e42ff0c52d6),
+    f64::from_bits(0x3ebc_6af8_4b91_2394),
+    f64::from_bits(0x3f2e_bfce_50fa_c4f3),
+    f64::from_bits(0x3f96_2e42_ff0c_52d6),
 ];
 
 /// `logf`'s table: 1/c and ln c at the centres c of 16 subintervals of [0.7, 1.4]
