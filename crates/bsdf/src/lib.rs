@@ -444,6 +444,9 @@ impl Bsdf {
             // Models whose value and density share costly steps compute them together.
             Bsdf::Principled(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::RoughConductor(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::Conductor(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::Dielectric(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::ThinDielectric(m) => m.eval_pdf(sp, wi, wo),
             _ => (self.eval(sp, wi, wo), self.pdf(sp, wi, wo)),
         }
     }
@@ -457,7 +460,14 @@ impl Bsdf {
     /// them otherwise: the packet loop runs those paths one at a time).
     #[inline]
     pub fn has_r(&self) -> bool {
-        matches!(self, Bsdf::Diffuse(_) | Bsdf::RoughConductor(_))
+        matches!(
+            self,
+            Bsdf::Diffuse(_)
+                | Bsdf::Conductor(_)
+                | Bsdf::RoughConductor(_)
+                | Bsdf::Dielectric(_)
+                | Bsdf::ThinDielectric(_)
+        )
     }
 
     /// [`Bsdf::eval_pdf`] over any [`Real`] (lanes for which the model says 0 give 0).
@@ -470,7 +480,10 @@ impl Bsdf {
     ) -> Option<(Vector3<R>, R)> {
         match self {
             Bsdf::Diffuse(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::Conductor(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::RoughConductor(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::Dielectric(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::ThinDielectric(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             _ => None,
         }
     }
@@ -486,7 +499,10 @@ impl Bsdf {
     ) -> Option<BsdfSampleR<R>> {
         match self {
             Bsdf::Diffuse(m) => Some(m.sample_r(sp, wi, u2)),
+            Bsdf::Conductor(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::RoughConductor(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::Dielectric(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::ThinDielectric(m) => Some(m.sample_r(sp, wi, u1, u2)),
             _ => None,
         }
     }
