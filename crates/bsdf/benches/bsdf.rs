@@ -2,8 +2,8 @@
 //! `Bsdf` enum (the dispatch the integrator pays), over fixed seeded inputs.
 //!
 //! Each model gets N = 4096 inputs (wi, u1, u2, wo), built once from a fixed seed: wi and
-//! wo cosine-distributed about +z (for the two-sided rough dielectric, half of each below the
-//! surface, so both reflection and refraction are exercised). `wo` is independent of `wi`,
+//! wo cosine-distributed about +z (for the dielectrics and the two-sided model, half of each
+//! below the surface, so both sides and both lobes are exercised). `wo` is independent of `wi`,
 //! as for a light sample in next-event estimation. Every iteration makes N calls; divan's
 //! item counter reads as calls per second (Mitem/s = M calls/s).
 //!
@@ -14,9 +14,11 @@ use divan::counter::ItemsCount;
 use divan::{black_box, Bencher};
 use glam::{Vec2, Vec3};
 use radia_bsdf::ior::lookup_conductor;
+use radia_bsdf::microfacet::Shadowing;
 use radia_bsdf::{
-    Bsdf, Diffuse, MicrofacetDistribution, MicrofacetType, Plastic, RoughConductor,
-    RoughDielectric, RoughPlastic, ShadingPoint,
+    BlinnPhong, Bsdf, Conductor, CookTorrance, CookTorranceFresnel, Diffuse, Dielectric,
+    MicrofacetDistribution, MicrofacetType, Phong, Plastic, RoughConductor, RoughDielectric,
+    RoughPlastic, ShadingPoint, ThinDielectric, TwoSided,
 };
 use radia_sampling::warp::square_to_cosine_hemisphere;
 use rand::{Rng, SeedableRng};
@@ -31,11 +33,20 @@ const N: usize = 4096;
 
 const MODELS: &[&str] = &[
     "diffuse",
+    "conductor",
     "roughconductor_ggx",
     "roughconductor_beckmann",
+    "roughconductor_beckmann_aniso_all",
+    "dielectric",
+    "thindielectric",
     "roughdielectric_ggx",
+    "roughdielectric_beckmann",
     "plastic",
     "roughplastic_ggx",
+    "twosided_roughconductor",
+    "phong",
+    "blinnphong",
+    "cooktorrance_gltf",
 ];
 
 struct Input {
@@ -69,9 +80,55 @@ fn model(name: &str) -> (Bsdf, bool) {
             )),
             false,
         ),
+        "roughconductor_beckmann_aniso_all" => (
+            Bsdf::RoughConductor(RoughConductor::new(
+                MicrofacetDistribution::new(MicrofacetType::Beckmann, 0.1, 0.3, false),
+                eta,
+                k,
+                Vec3::ONE,
+            )),
+            false,
+        ),
+        "conductor" => (Bsdf::Conductor(Conductor::new(eta, k, Vec3::ONE)), false),
+        "dielectric" => (Bsdf::Dielectric(Dielectric::new(1.5, 1.0)), true),
+        "thindielectric" => (Bsdf::ThinDielectric(ThinDielectric::new(1.5, 1.0)), true),
         "roughdielectric_ggx" => (
             Bsdf::RoughDielectric(RoughDielectric::new(ggx(0.2), 1.5, 1.0)),
             true,
+        ),
+        "roughdielectric_beckmann" => (
+            Bsdf::RoughDielectric(RoughDielectric::new(
+                MicrofacetDistribution::new(MicrofacetType::Beckmann, 0.2, 0.2, true),
+                1.5,
+                1.0,
+            )),
+            true,
+        ),
+        "twosided_roughconductor" => (
+            Bsdf::TwoSided(TwoSided::new(
+                Bsdf::RoughConductor(RoughConductor::new(ggx(0.2), eta, k, Vec3::ONE)),
+                Bsdf::Diffuse(Diffuse::new(Vec3::splat(0.5))),
+            )),
+            true,
+        ),
+        "phong" => (
+            Bsdf::Phong(Phong::new(Vec3::splat(0.3), Vec3::splat(0.5), 40.0)),
+            false,
+        ),
+        "blinnphong" => (
+            Bsdf::BlinnPhong(BlinnPhong::new(Vec3::splat(0.3), Vec3::splat(0.5), 40.0)),
+            false,
+        ),
+        "cooktorrance_gltf" => (
+            Bsdf::CookTorrance(CookTorrance::new(
+                ggx(0.2),
+                Shadowing::Separable,
+                CookTorranceFresnel::MetallicRoughness {
+                    base_color: Vec3::new(0.8, 0.5, 0.2).into(),
+                    metallic: 0.5.into(),
+                },
+            )),
+            false,
         ),
         "plastic" => (
             Bsdf::Plastic(Plastic::new(

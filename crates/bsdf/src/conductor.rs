@@ -8,11 +8,13 @@
 //! ```
 //! A perfect mirror weighted by the exact conductor Fresnel reflectance of the complex IOR
 //! η + ik. One-sided: nothing from below the surface. A single delta lobe: `sample` returns
-//! pdf 1 and the weight F(cos θi)·specular_reflectance; `eval` and `pdf` are 0.
+//! pdf 1 and the weight F(cos θi)·specular_reflectance; `eval` and `pdf` are 0. Written once
+//! over [`Real`] (`eval_pdf_r`, `sample_r`) for one path or a packet's lanes.
 
-use crate::fresnel::{fresnel_conductor, reflect};
-use crate::{BsdfSample, LobeFlags, ShadingPoint, Texture};
+use crate::fresnel::{fresnel_conductor_r, reflect_r};
+use crate::{BsdfSample, BsdfSampleR, LobeFlags, ShadingPoint, ShadingPointR, Texture};
 use glam::{Vec2, Vec3};
+use radia_math::real::{Mask, Real, Vector2, Vector3};
 use radia_math::Spectrum;
 
 #[derive(Clone, Debug)]
@@ -43,34 +45,63 @@ impl Conductor {
     }
 
     #[inline]
-    pub fn eval(&self, _sp: &ShadingPoint, _wi: Vec3, _wo: Vec3) -> Spectrum {
-        Spectrum::ZERO
+    pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
+        self.eval_pdf(sp, wi, wo).0
     }
 
     #[inline]
-    pub fn pdf(&self, _sp: &ShadingPoint, _wi: Vec3, _wo: Vec3) -> f32 {
-        0.0
+    pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
+        self.eval_pdf(sp, wi, wo).1
     }
 
     #[inline]
-    pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, _u1: f32, _u2: Vec2) -> Option<BsdfSample> {
-        if !(wi.z > 0.0) {
-            return None;
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let (f, pdf) = self.eval_pdf_r(&sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
+    }
+
+    #[inline]
+    pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
+        self.sample_r(&sp.into(), wi.into(), u1, u2.into())
+            .one_path(LobeFlags::DELTA_REFLECTION)
+    }
+
+    /// eval and pdf over any [`Real`]: zero (a delta lobe only).
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        _sp: &ShadingPointR<R>,
+        _wi: Vector3<R>,
+        _wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        (Vector3::zero(), R::zero())
+    }
+
+    /// sample over any [`Real`]: the mirror direction, weighted by the Fresnel reflectance.
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        _u1: R,
+        _u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        let f = fresnel_conductor_r(wi.z, self.eta, self.k);
+        BsdfSampleR {
+            wo: reflect_r(wi),
+            weight: self.specular_reflectance.eval_r(sp) * f,
+            pdf: R::one(),
+            eta: R::one(),
+            valid: wi.z.greater(R::zero()),
+            delta: R::Mask::splat(true),
         }
-        let f = fresnel_conductor(wi.z, self.eta, self.k);
-        Some(BsdfSample {
-            wo: reflect(wi),
-            weight: self.specular_reflectance.eval(sp) * f,
-            pdf: 1.0,
-            eta: 1.0,
-            lobe: LobeFlags::DELTA_REFLECTION,
-        })
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fresnel::fresnel_conductor;
     use crate::ior::lookup_conductor;
     use crate::testing::*;
     use crate::Bsdf;

@@ -259,8 +259,8 @@ impl CookTorrance {
             // Specular only: the weight in closed form, as the rough conductor's.
             let s = sample_microfacet_reflection(&d, self.shadowing, wi, u2)?;
             return Some(BsdfSample {
-                wo: s.wo,
-                weight: fresnel_schlick(wi.dot(s.m), p.f0) * s.weight,
+                wo: s.wo.into(),
+                weight: fresnel_schlick(wi.dot(s.m.into()), p.f0) * s.weight,
                 pdf: s.pdf,
                 eta: 1.0,
                 lobe: LobeFlags::GLOSSY_REFLECTION,
@@ -268,7 +268,9 @@ impl CookTorrance {
         }
         let specular = u1 < ps;
         let wo = if specular {
-            sample_microfacet_reflection(&d, self.shadowing, wi, u2)?.wo
+            sample_microfacet_reflection(&d, self.shadowing, wi, u2)?
+                .wo
+                .into()
         } else {
             warp::square_to_cosine_hemisphere(u2)
         };

@@ -11,11 +11,13 @@
 //! 1/η² for refraction (radiance is compressed into the smaller solid angle: η = η_t/η_i is
 //! the returned `eta`); `pdf` is the probability of the chosen lobe, F or 1 − F, as
 //! Mitsuba's. Both sides: from inside (cos θi < 0) the relative IOR is 1/η, and beyond the
-//! critical angle F = 1 (total internal reflection).
+//! critical angle F = 1 (total internal reflection). Written once over [`Real`]
+//! (`eval_pdf_r`, `sample_r`) for one path or a packet's lanes.
 
-use crate::fresnel::{fresnel_dielectric, reflect, refract};
-use crate::{BsdfSample, LobeFlags, ShadingPoint, Texture};
+use crate::fresnel::{fresnel_dielectric_r, reflect_r, refract_r};
+use crate::{BsdfSample, BsdfSampleR, LobeFlags, ShadingPoint, ShadingPointR, Texture};
 use glam::{Vec2, Vec3};
+use radia_math::real::{Mask, Real, Vector2, Vector3};
 use radia_math::Spectrum;
 
 #[derive(Clone, Debug)]
@@ -40,46 +42,85 @@ impl Dielectric {
     }
 
     #[inline]
-    pub fn eval(&self, _sp: &ShadingPoint, _wi: Vec3, _wo: Vec3) -> Spectrum {
-        Spectrum::ZERO
+    pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
+        self.eval_pdf(sp, wi, wo).0
     }
 
     #[inline]
-    pub fn pdf(&self, _sp: &ShadingPoint, _wi: Vec3, _wo: Vec3) -> f32 {
-        0.0
+    pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
+        self.eval_pdf(sp, wi, wo).1
     }
 
     #[inline]
-    pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, _u2: Vec2) -> Option<BsdfSample> {
-        if !wi.is_finite() {
-            return None;
-        }
-        let fr = fresnel_dielectric(wi.z, self.eta);
-        // Mitsuba selects reflection when u1 ≤ F; `<` never picks a lobe of probability 0.
-        if u1 < fr.f {
-            Some(BsdfSample {
-                wo: reflect(wi),
-                weight: self.specular_reflectance.eval(sp),
-                pdf: fr.f,
-                eta: 1.0,
-                lobe: LobeFlags::DELTA_REFLECTION,
-            })
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let (f, pdf) = self.eval_pdf_r(&sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
+    }
+
+    #[inline]
+    pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
+        let (s, reflected) = self.sample_lobe(&sp.into(), wi.into(), u1, u2.into());
+        s.one_path(if reflected {
+            LobeFlags::DELTA_REFLECTION
         } else {
-            Some(BsdfSample {
-                wo: refract(wi, fr.cos_theta_t, fr.eta_ti),
-                // Radiance mode: the solid angle compression (Mitsuba: weight *= eta_ti²).
-                weight: self.specular_transmittance.eval(sp) * (fr.eta_ti * fr.eta_ti),
-                pdf: 1.0 - fr.f,
-                eta: fr.eta_it,
-                lobe: LobeFlags::DELTA_TRANSMISSION,
-            })
-        }
+            LobeFlags::DELTA_TRANSMISSION
+        })
+    }
+
+    /// eval and pdf over any [`Real`]: zero (delta lobes only).
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        _sp: &ShadingPointR<R>,
+        _wi: Vector3<R>,
+        _wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        (Vector3::zero(), R::zero())
+    }
+
+    /// sample over any [`Real`].
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        self.sample_lobe(sp, wi, u1, u2).0
+    }
+
+    /// The sample and the lanes that reflected (the others refracted).
+    #[inline(always)]
+    fn sample_lobe<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        _u2: Vector2<R>,
+    ) -> (BsdfSampleR<R>, R::Mask) {
+        let fr = fresnel_dielectric_r(wi.z, R::splat(self.eta));
+        // Mitsuba selects reflection when u1 ≤ F; `<` never picks a lobe of probability 0.
+        let reflected = u1.less(fr.f);
+        let transmitted = refract_r(wi, fr.cos_theta_t, fr.eta_ti);
+        // Radiance mode: the solid angle compression (Mitsuba: weight *= eta_ti²).
+        let t_weight = self.specular_transmittance.eval_r(sp) * (fr.eta_ti * fr.eta_ti);
+        let s = BsdfSampleR {
+            wo: Vector3::select(reflected, reflect_r(wi), transmitted),
+            weight: Vector3::select(reflected, self.specular_reflectance.eval_r(sp), t_weight),
+            pdf: R::select(reflected, fr.f, R::one() - fr.f),
+            eta: R::select(reflected, R::one(), fr.eta_it),
+            valid: wi.is_finite(),
+            delta: R::Mask::splat(true),
+        };
+        (s, reflected)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fresnel::fresnel_dielectric;
     use crate::testing::*;
     use crate::Bsdf;
 

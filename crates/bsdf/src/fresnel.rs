@@ -2,7 +2,8 @@
 //! `include/mitsuba/render/fresnel.h` (same argument conventions and special cases).
 
 use glam::Vec3;
-use radia_math::{safe_sqrt, Spectrum};
+use radia_math::real::{Real, Vector3};
+use radia_math::Spectrum;
 
 /// The unpolarized Fresnel reflectance of a dielectric interface and what refraction needs
 /// (Mitsuba's `fresnel()` tuple).
@@ -19,36 +20,52 @@ pub struct DielectricFresnel {
     pub eta_ti: f32,
 }
 
+/// [`DielectricFresnel`] over a [`Real`].
+#[derive(Clone, Copy, Debug)]
+pub struct DielectricFresnelR<R> {
+    pub f: R,
+    pub cos_theta_t: R,
+    pub eta_it: R,
+    pub eta_ti: R,
+}
+
 /// Fresnel reflectance at an interface of relative IOR `eta` (interior over exterior; the
 /// normal points outside), for a direction with cosine `cos_theta_i` (negative: from inside).
+#[inline]
 pub fn fresnel_dielectric(cos_theta_i: f32, eta: f32) -> DielectricFresnel {
-    let outside = cos_theta_i >= 0.0;
-    let rcp_eta = 1.0 / eta;
-    let (eta_it, eta_ti) = if outside {
-        (eta, rcp_eta)
-    } else {
-        (rcp_eta, eta)
-    };
+    let r = fresnel_dielectric_r(cos_theta_i, eta);
+    DielectricFresnel {
+        f: r.f,
+        cos_theta_t: r.cos_theta_t,
+        eta_it: r.eta_it,
+        eta_ti: r.eta_ti,
+    }
+}
+
+/// [`fresnel_dielectric`] over any [`Real`].
+#[inline(always)]
+pub fn fresnel_dielectric_r<R: Real>(cos_theta_i: R, eta: R) -> DielectricFresnelR<R> {
+    let (zero, one) = (R::zero(), R::one());
+    let outside = cos_theta_i.greater_eq(zero);
+    let rcp_eta = one / eta;
+    let eta_it = R::select(outside, eta, rcp_eta);
+    let eta_ti = R::select(outside, rcp_eta, eta);
 
     // Snell's law: the squared cosine of the refracted direction (negative: TIR).
-    let cos_theta_t_sqr = 1.0 - (1.0 - cos_theta_i * cos_theta_i) * (eta_ti * eta_ti);
+    let cos_theta_t_sqr = one - (one - cos_theta_i * cos_theta_i) * (eta_ti * eta_ti);
     let cos_i = cos_theta_i.abs();
-    let cos_t = safe_sqrt(cos_theta_t_sqr);
+    let cos_t = cos_theta_t_sqr.safe_sqrt();
 
-    let f = if eta == 1.0 {
-        0.0
-    } else if cos_i == 0.0 {
-        1.0
-    } else {
-        // Amplitudes of the s- and p-polarized reflected waves.
-        let a_s = (cos_i - eta_it * cos_t) / (cos_i + eta_it * cos_t);
-        let a_p = (cos_t - eta_it * cos_i) / (cos_t + eta_it * cos_i);
-        0.5 * (a_s * a_s + a_p * a_p)
-    };
-    DielectricFresnel {
+    // Amplitudes of the s- and p-polarized reflected waves.
+    let a_s = (cos_i - eta_it * cos_t) / (cos_i + eta_it * cos_t);
+    let a_p = (cos_t - eta_it * cos_i) / (cos_t + eta_it * cos_i);
+    let f = R::splat(0.5) * (a_s * a_s + a_p * a_p);
+    let f = R::select(cos_i.equals(zero), one, f);
+    let f = R::select(eta.equals(one), zero, f);
+    DielectricFresnelR {
         f,
         // Mitsuba's mulsign_neg: the transmitted direction is on the other side.
-        cos_theta_t: if cos_theta_i >= 0.0 { -cos_t } else { cos_t },
+        cos_theta_t: cos_t.negate_where(outside),
         eta_it,
         eta_ti,
     }
@@ -58,31 +75,38 @@ pub fn fresnel_dielectric(cos_theta_i: f32, eta: f32) -> DielectricFresnel {
 /// (Mitsuba's `fresnel_conductor`, after K. D. Möller, *Optics*, 1988). Assumes light
 /// arrives from outside (cos θ_i ≥ 0). With eta = 0, k = 1 (Mitsuba's `material="none"`)
 /// it is exactly 1.
+#[inline]
 pub fn fresnel_conductor(cos_theta_i: f32, eta: Spectrum, k: Spectrum) -> Spectrum {
-    Spectrum::new(
-        fresnel_conductor_1(cos_theta_i, eta.x, k.x),
-        fresnel_conductor_1(cos_theta_i, eta.y, k.y),
-        fresnel_conductor_1(cos_theta_i, eta.z, k.z),
-    )
+    fresnel_conductor_r(cos_theta_i, eta, k).into()
 }
 
-fn fresnel_conductor_1(cos_theta_i: f32, eta_r: f32, eta_i: f32) -> f32 {
+/// [`fresnel_conductor`] over any [`Real`] (the IOR is the material's, the same in every
+/// lane).
+#[inline(always)]
+pub fn fresnel_conductor_r<R: Real>(cos_theta_i: R, eta: Spectrum, k: Spectrum) -> Vector3<R> {
+    let f = |eta: f32, k: f32| fresnel_conductor_1(cos_theta_i, R::splat(eta), R::splat(k));
+    Vector3::new(f(eta.x, k.x), f(eta.y, k.y), f(eta.z, k.z))
+}
+
+#[inline(always)]
+fn fresnel_conductor_1<R: Real>(cos_theta_i: R, eta_r: R, eta_i: R) -> R {
+    let (one, half, two) = (R::one(), R::splat(0.5), R::splat(2.0));
     let cos2 = cos_theta_i * cos_theta_i;
-    let sin2 = 1.0 - cos2;
+    let sin2 = one - cos2;
     let sin4 = sin2 * sin2;
 
     let temp_1 = eta_r * eta_r - eta_i * eta_i - sin2;
-    let a2_pb2 = safe_sqrt(temp_1 * temp_1 + 4.0 * eta_i * eta_i * eta_r * eta_r);
-    let a = safe_sqrt(0.5 * (a2_pb2 + temp_1));
+    let a2_pb2 = (temp_1 * temp_1 + R::splat(4.0) * eta_i * eta_i * eta_r * eta_r).safe_sqrt();
+    let a = (half * (a2_pb2 + temp_1)).safe_sqrt();
 
     let term_1 = a2_pb2 + cos2;
-    let term_2 = 2.0 * cos_theta_i * a;
+    let term_2 = two * cos_theta_i * a;
     let r_s = (term_1 - term_2) / (term_1 + term_2);
 
     let term_3 = a2_pb2 * cos2 + sin4;
     let term_4 = term_2 * sin2;
     let r_p = r_s * (term_3 - term_4) / (term_3 + term_4);
-    0.5 * (r_s + r_p)
+    half * (r_s + r_p)
 }
 
 /// Schlick's approximation F0 + (1 − F0)(1 − cos θ)⁵ (C. Schlick, "An Inexpensive BRDF Model
@@ -119,25 +143,54 @@ pub fn fresnel_diffuse_reflectance(eta: f32) -> f32 {
 /// Mirror reflection about the local normal: (−x, −y, z).
 #[inline]
 pub fn reflect(wi: Vec3) -> Vec3 {
-    Vec3::new(-wi.x, -wi.y, wi.z)
+    reflect_r(wi.into()).into()
+}
+
+/// [`reflect`] over any [`Real`].
+#[inline(always)]
+pub fn reflect_r<R: Real>(wi: Vector3<R>) -> Vector3<R> {
+    Vector3::new(-wi.x, -wi.y, wi.z)
 }
 
 /// Mirror reflection of `wi` about the (micro)normal `m`: 2 (wi·m) m − wi.
 #[inline]
 pub fn reflect_about(wi: Vec3, m: Vec3) -> Vec3 {
-    m * (2.0 * wi.dot(m)) - wi
+    reflect_about_r(wi.into(), m.into()).into()
+}
+
+/// [`reflect_about`] over any [`Real`].
+#[inline(always)]
+pub fn reflect_about_r<R: Real>(wi: Vector3<R>, m: Vector3<R>) -> Vector3<R> {
+    m * (R::splat(2.0) * wi.dot(m)) - wi
 }
 
 /// Refraction through the local normal, with `cos_theta_t` and `eta_ti` from
 /// [`fresnel_dielectric`].
 #[inline]
 pub fn refract(wi: Vec3, cos_theta_t: f32, eta_ti: f32) -> Vec3 {
-    Vec3::new(-eta_ti * wi.x, -eta_ti * wi.y, cos_theta_t)
+    refract_r(wi.into(), cos_theta_t, eta_ti).into()
+}
+
+/// [`refract`] over any [`Real`].
+#[inline(always)]
+pub fn refract_r<R: Real>(wi: Vector3<R>, cos_theta_t: R, eta_ti: R) -> Vector3<R> {
+    Vector3::new(-eta_ti * wi.x, -eta_ti * wi.y, cos_theta_t)
 }
 
 /// Refraction of `wi` through the microsurface normal `m` (Mitsuba's `refract(wi, m, ...)`).
 #[inline]
 pub fn refract_about(wi: Vec3, m: Vec3, cos_theta_t: f32, eta_ti: f32) -> Vec3 {
+    refract_about_r(wi.into(), m.into(), cos_theta_t, eta_ti).into()
+}
+
+/// [`refract_about`] over any [`Real`].
+#[inline(always)]
+pub fn refract_about_r<R: Real>(
+    wi: Vector3<R>,
+    m: Vector3<R>,
+    cos_theta_t: R,
+    eta_ti: R,
+) -> Vector3<R> {
     m * (wi.dot(m) * eta_ti + cos_theta_t) - wi * eta_ti
 }
 

@@ -52,7 +52,7 @@
 //! `principled` and `principledthin` share, Mitsuba's `principledhelpers.h`).
 
 use glam::{Vec2, Vec3};
-use radia_math::real::{Real, Vector2, Vector3};
+use radia_math::real::{Mask as _, Real, Vector2, Vector3};
 use radia_math::Spectrum;
 
 mod aov;
@@ -82,6 +82,8 @@ mod texture;
 mod thin_dielectric;
 mod twosided;
 
+#[cfg(test)]
+mod lanes_test;
 #[cfg(test)]
 mod testing;
 
@@ -245,6 +247,36 @@ pub struct BsdfSampleR<R: Real> {
     pub valid: R::Mask,
     /// Lanes whose sample came from a delta lobe.
     pub delta: R::Mask,
+}
+
+impl<R: Real> BsdfSampleR<R> {
+    /// No sample in any lane.
+    #[inline(always)]
+    pub fn none() -> Self {
+        Self {
+            wo: Vector3::zero(),
+            weight: Vector3::zero(),
+            pdf: R::zero(),
+            eta: R::one(),
+            valid: R::Mask::splat(false),
+            delta: R::Mask::splat(false),
+        }
+    }
+}
+
+impl BsdfSampleR<f32> {
+    /// The one-path record: `Some` where the sample is valid, from the lobe the model says
+    /// it chose.
+    #[inline(always)]
+    pub(crate) fn one_path(self, lobe: LobeFlags) -> Option<BsdfSample> {
+        self.valid.then(|| BsdfSample {
+            wo: self.wo.into(),
+            weight: self.weight.into(),
+            pdf: self.pdf,
+            eta: self.eta,
+            lobe,
+        })
+    }
 }
 
 /// The result of [`Bsdf::sample`].
@@ -412,6 +444,9 @@ impl Bsdf {
             // Models whose value and density share costly steps compute them together.
             Bsdf::Principled(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::RoughConductor(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::Conductor(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::Dielectric(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::ThinDielectric(m) => m.eval_pdf(sp, wi, wo),
             _ => (self.eval(sp, wi, wo), self.pdf(sp, wi, wo)),
         }
     }
@@ -425,7 +460,14 @@ impl Bsdf {
     /// them otherwise: the packet loop runs those paths one at a time).
     #[inline]
     pub fn has_r(&self) -> bool {
-        matches!(self, Bsdf::Diffuse(_))
+        matches!(
+            self,
+            Bsdf::Diffuse(_)
+                | Bsdf::Conductor(_)
+                | Bsdf::RoughConductor(_)
+                | Bsdf::Dielectric(_)
+                | Bsdf::ThinDielectric(_)
+        )
     }
 
     /// [`Bsdf::eval_pdf`] over any [`Real`] (lanes for which the model says 0 give 0).
@@ -438,6 +480,10 @@ impl Bsdf {
     ) -> Option<(Vector3<R>, R)> {
         match self {
             Bsdf::Diffuse(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::Conductor(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::RoughConductor(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::Dielectric(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::ThinDielectric(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             _ => None,
         }
     }
@@ -448,11 +494,15 @@ impl Bsdf {
         &self,
         sp: &ShadingPointR<R>,
         wi: Vector3<R>,
-        _u1: R,
+        u1: R,
         u2: Vector2<R>,
     ) -> Option<BsdfSampleR<R>> {
         match self {
             Bsdf::Diffuse(m) => Some(m.sample_r(sp, wi, u2)),
+            Bsdf::Conductor(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::RoughConductor(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::Dielectric(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::ThinDielectric(m) => Some(m.sample_r(sp, wi, u1, u2)),
             _ => None,
         }
     }
@@ -493,7 +543,7 @@ pub(crate) fn mean(c: Spectrum) -> f32 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::microfacet::Shadowing;
     use crate::testing::*;
@@ -501,11 +551,11 @@ mod tests {
     use rand_pcg::Pcg32;
 
     /// log-uniform in [lo, hi].
-    fn log_uniform(rng: &mut Pcg32, lo: f32, hi: f32) -> f32 {
+    pub(crate) fn log_uniform(rng: &mut Pcg32, lo: f32, hi: f32) -> f32 {
         (lo.ln() + rng.random::<f32>() * (hi.ln() - lo.ln())).exp()
     }
 
-    fn random_color(rng: &mut Pcg32) -> Spectrum {
+    pub(crate) fn random_color(rng: &mut Pcg32) -> Spectrum {
         match rng.random_range(0..4) {
             0 => Spectrum::ZERO,
             1 => Spectrum::ONE,
@@ -515,7 +565,7 @@ mod tests {
 
     /// Any model, with parameters spanning their extremes: α in [10⁻⁴, 1] (and anisotropic),
     /// IOR in [1.0001, 4] on either side, exponents up to 10⁵, blends and two-sided nests.
-    fn random_bsdf(rng: &mut Pcg32, depth: u32) -> Bsdf {
+    pub(crate) fn random_bsdf(rng: &mut Pcg32, depth: u32) -> Bsdf {
         let kind = if rng.random() {
             MicrofacetType::Beckmann
         } else {
@@ -656,7 +706,7 @@ mod tests {
     /// Directions including the hard cases: grazing (|cos θ| down to 10⁻⁷), exactly in the
     /// tangent plane, along the normal, below the surface, and mirror/refraction-aligned
     /// pairs (half vectors that vanish).
-    fn random_direction(rng: &mut Pcg32) -> Vec3 {
+    pub(crate) fn random_direction(rng: &mut Pcg32) -> Vec3 {
         let phi = rng.random::<f32>() * 6.2831855;
         let z = match rng.random_range(0..8) {
             0 => 0.0,
@@ -669,7 +719,7 @@ mod tests {
         dir(z, phi)
     }
 
-    fn random_u(rng: &mut Pcg32) -> f32 {
+    pub(crate) fn random_u(rng: &mut Pcg32) -> f32 {
         match rng.random_range(0..10) {
             0 => 0.0,
             1 => 1.0 - f32::EPSILON / 2.0,

@@ -11,9 +11,16 @@
 //!
 //! Roughness `alpha` is used as given (no remapping), clamped to ≥ 10⁻⁴ as Mitsuba does.
 //! All vectors are in the local frame; `m` is a microfacet normal.
+//!
+//! Written once over [`Real`] ([`MicrofacetDistributionR`], whose α may differ lane by lane
+//! where a texture gives it): [`MicrofacetDistribution`]'s methods are its `f32`
+//! instantiation. Early returns are masks and selects, so every lane computes the whole
+//! formula (a Beckmann G1 at a back-facing normal is computed, then replaced by 0).
 
+use crate::ShadingPointR;
 use glam::{Vec2, Vec3};
-use radia_math::{safe_sqrt, PI};
+use radia_math::real::{select_lazy, Real, Vector2, Vector3};
+use radia_math::{trig, PI};
 use radia_sampling::warp;
 
 /// Which normal distribution.
@@ -50,6 +57,16 @@ pub struct MicrofacetDistribution {
     pub sample_visible: bool,
 }
 
+/// [`MicrofacetDistribution`] over a [`Real`]: α per lane (a texture's lookups, or the same
+/// constant in every lane); the kind and the sampling strategy are the material's.
+#[derive(Clone, Copy, Debug)]
+pub struct MicrofacetDistributionR<R> {
+    pub kind: MicrofacetType,
+    pub alpha_u: R,
+    pub alpha_v: R,
+    pub sample_visible: bool,
+}
+
 /// Roughness given as textures (Mitsuba's `alpha`, or `alpha_u` and `alpha_v`, bound to a
 /// texture): the distribution at a shading point takes α_u and α_v from their `eval_1`,
 /// as `roughconductor.cpp` and `roughdielectric.cpp` build one per lookup.
@@ -72,19 +89,50 @@ impl MicrofacetDistribution {
         }
     }
 
+    /// This distribution in every lane of a [`Real`].
+    #[inline(always)]
+    pub fn splat<R: Real>(&self) -> MicrofacetDistributionR<R> {
+        MicrofacetDistributionR {
+            kind: self.kind,
+            alpha_u: R::splat(self.alpha_u),
+            alpha_v: R::splat(self.alpha_v),
+            sample_visible: self.sample_visible,
+        }
+    }
+
+    /// One path's distribution over `f32`, what the methods below call.
+    #[inline(always)]
+    fn r(&self) -> MicrofacetDistributionR<f32> {
+        self.splat()
+    }
+
     /// This distribution, or with α looked up in `textures` at `sp` (kind and sampling
     /// strategy kept, α clamped as [`MicrofacetDistribution::new`] does). Without textures
     /// it is a copy: the constant path costs one branch.
     #[inline]
     pub fn at(&self, textures: &Option<Box<RoughnessTextures>>, sp: &crate::ShadingPoint) -> Self {
+        let d = self.at_r::<f32>(textures, &sp.into());
+        Self {
+            alpha_u: d.alpha_u,
+            alpha_v: d.alpha_v,
+            ..*self
+        }
+    }
+
+    /// [`MicrofacetDistribution::at`] over any [`Real`]: textured α looked up lane by lane.
+    #[inline(always)]
+    pub fn at_r<R: Real>(
+        &self,
+        textures: &Option<Box<RoughnessTextures>>,
+        sp: &ShadingPointR<R>,
+    ) -> MicrofacetDistributionR<R> {
         match textures {
-            None => *self,
-            Some(t) => Self::new(
-                self.kind,
-                t.alpha_u.eval_1(sp),
-                t.alpha_v.eval_1(sp),
-                self.sample_visible,
-            ),
+            None => self.splat(),
+            Some(t) => MicrofacetDistributionR {
+                alpha_u: t.alpha_u.eval_1_r(sp).max(R::splat(MIN_ALPHA)),
+                alpha_v: t.alpha_v.eval_1_r(sp).max(R::splat(MIN_ALPHA)),
+                ..self.splat()
+            },
         }
     }
 
@@ -94,9 +142,10 @@ impl MicrofacetDistribution {
 
     /// The same distribution with both roughnesses multiplied by `s` (Mitsuba's `scale_alpha`).
     pub fn scaled(&self, s: f32) -> Self {
+        let d = self.r().scaled(s);
         Self {
-            alpha_u: self.alpha_u * s,
-            alpha_v: self.alpha_v * s,
+            alpha_u: d.alpha_u,
+            alpha_v: d.alpha_v,
             ..*self
         }
     }
@@ -104,141 +153,34 @@ impl MicrofacetDistribution {
     /// D(m): microfacet area per unit projected area and solid angle of normals.
     #[inline]
     pub fn eval(&self, m: Vec3) -> f32 {
-        let (au, av) = (self.alpha_u, self.alpha_v);
-        let cos2 = m.z * m.z;
-        let x = m.x / au;
-        let y = m.y / av;
-        let d = match self.kind {
-            MicrofacetType::Beckmann => {
-                exp_neg(-(x * x + y * y) / cos2) / (PI * au * av * cos2 * cos2)
-            }
-            MicrofacetType::Ggx => {
-                let t = x * x + y * y + cos2;
-                1.0 / (PI * au * av * t * t)
-            }
-        };
-        // As Mitsuba: drop tiny values and everything on the lower hemisphere (and NaN).
-        if d * m.z > 1e-20 {
-            d
-        } else {
-            0.0
-        }
+        self.r().eval(m.into())
     }
 
     /// Density (per solid angle of `m`) with which [`Self::sample`] returns `m`.
     #[inline]
     pub fn pdf(&self, wi: Vec3, m: Vec3) -> f32 {
-        self.pdf_given(self.eval(m), wi, m)
+        self.r().pdf(wi.into(), m.into())
     }
 
     /// [`Self::pdf`] given D(m) = `d` (`self.eval(m)`), for callers that evaluated it already.
     #[inline]
     pub fn pdf_given(&self, d: f32, wi: Vec3, m: Vec3) -> f32 {
-        if self.sample_visible {
-            d * self.visible_g1(wi, m) * wi.dot(m).abs() / wi.z
-        } else {
-            d * m.z
-        }
+        self.r().pdf_given(d, wi.into(), m.into())
     }
 
-    /// The G1 that normalizes the distribution of visible normals, D(m) G1(wi) (wi·m)/cos θi,
-    /// which [`Self::sample`] draws exactly: the exact Smith G1. For GGX that is
-    /// [`Self::smith_g1`]; for Beckmann it is 2/(1 + erf(a) + e^(−a²)/(a√π)), where Mitsuba
-    /// uses the rational approximation (up to 0.35% off) in its pdf too, so that its pdf and
-    /// its sampler disagree by as much. radia evaluates the BSDF with Mitsuba's G (the same
-    /// values) but its pdf and sample weights with this one: sampling stays exact.
+    /// The G1 that normalizes the distribution of visible normals (see
+    /// [`MicrofacetDistributionR::visible_g1`]).
     #[inline]
     pub fn visible_g1(&self, v: Vec3, m: Vec3) -> f32 {
-        match self.kind {
-            MicrofacetType::Ggx => self.smith_g1(v, m),
-            MicrofacetType::Beckmann => {
-                if v.dot(m) * v.z <= 0.0 {
-                    return 0.0;
-                }
-                let xy_alpha_2 = (self.alpha_u * v.x).powi(2) + (self.alpha_v * v.y).powi(2);
-                if xy_alpha_2 == 0.0 {
-                    return 1.0;
-                }
-                let a = v.z.abs() / xy_alpha_2.sqrt();
-                const SQRT_PI: f32 = 1.772_453_9;
-                2.0 / (1.0 + erf(a) + exp_neg(-a * a) / (a * SQRT_PI))
-            }
-        }
+        self.r().visible_g1(v.into(), m.into())
     }
 
     /// Samples a microfacet normal (for `wi` on the upper side); returns it with its density.
     /// The density is 0 (and the normal possibly not finite) when sampling failed.
-    pub fn sample(&self, wi: Vec3, u: Vec2) -> (Vec3, f32) {
-        if self.sample_visible {
-            self.sample_visible_normal(wi, u)
-        } else {
-            self.sample_all_normals(u)
-        }
-    }
-
-    /// D(m) cos θ_m sampling (Walter et al. 2007), isotropic or anisotropic.
-    fn sample_all_normals(&self, u: Vec2) -> (Vec3, f32) {
-        let (au, av) = (self.alpha_u, self.alpha_v);
-        let (sin_phi, cos_phi, alpha_2) = if self.is_isotropic() {
-            let (s, c) = radia_math::trig::sin_cos_turns(u.y);
-            (s, c, au * au)
-        } else {
-            // The azimuth of an elliptical distribution: tan φ' = (αv/αu) tan 2πu, in the
-            // quadrant of 2πu.
-            let tmp = (av / au) * (2.0 * PI * u.y).tan();
-            let mut cos_phi = 1.0 / (tmp * tmp + 1.0).sqrt();
-            if (u.y - 0.5).abs() - 0.25 < 0.0 {
-                cos_phi = -cos_phi;
-            }
-            let sin_phi = cos_phi * tmp;
-            let a2 = 1.0 / ((cos_phi / au).powi(2) + (sin_phi / av).powi(2));
-            (sin_phi, cos_phi, a2)
-        };
-        let (cos_theta, pdf) = match self.kind {
-            MicrofacetType::Beckmann => {
-                let cos_theta = 1.0 / (1.0 - alpha_2 * (1.0 - u.x).ln()).sqrt();
-                let cos3 = (cos_theta * cos_theta * cos_theta).max(1e-20);
-                (cos_theta, (1.0 - u.x) / (PI * au * av * cos3))
-            }
-            MicrofacetType::Ggx => {
-                let tan2 = alpha_2 * u.x / (1.0 - u.x);
-                let cos_theta = 1.0 / (1.0 + tan2).sqrt();
-                let temp = 1.0 + tan2 / alpha_2;
-                let cos3 = (cos_theta * cos_theta * cos_theta).max(1e-20);
-                (cos_theta, 1.0 / (PI * au * av * cos3 * temp * temp))
-            }
-        };
-        let sin_theta = safe_sqrt(1.0 - cos_theta * cos_theta);
-        (
-            Vec3::new(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta),
-            pdf,
-        )
-    }
-
-    /// Visible normals (Heitz and d'Eon 2014): stretch wi to the α = 1 configuration,
-    /// sample slopes there, rotate and unstretch.
-    fn sample_visible_normal(&self, wi: Vec3, u: Vec2) -> (Vec3, f32) {
-        let (au, av) = (self.alpha_u, self.alpha_v);
-        let wi_p = Vec3::new(au * wi.x, av * wi.y, wi.z).normalize();
-        let (sin_phi, cos_phi) = sincos_phi(wi_p);
-        let slope = self.sample_visible_11(wi_p.z, u);
-        let Some(m) = self.unstretch(sin_phi, cos_phi, slope) else {
-            return (Vec3::Z, 0.0);
-        };
-        let pdf = self.eval(m) * self.visible_g1(wi, m) * wi.dot(m).abs() / wi.z;
-        (m, pdf)
-    }
-
-    /// The normal of the α = 1 slopes `slope`, rotated to wi's azimuth (φ given by its sine
-    /// and cosine) and unstretched; `None` if it is not finite.
     #[inline]
-    fn unstretch(&self, sin_phi: f32, cos_phi: f32, slope: Vec2) -> Option<Vec3> {
-        let slope = Vec2::new(
-            (cos_phi * slope.x - sin_phi * slope.y) * self.alpha_u,
-            (sin_phi * slope.x + cos_phi * slope.y) * self.alpha_v,
-        );
-        let m = Vec3::new(-slope.x, -slope.y, 1.0).normalize();
-        m.is_finite().then_some(m)
+    pub fn sample(&self, wi: Vec3, u: Vec2) -> (Vec3, f32) {
+        let (m, pdf) = self.r().sample(wi.into(), u.into());
+        (m.into(), pdf)
     }
 
     /// Calls `f(i, j, m)` with the normal `m` that [`Self::sample`] gives for
@@ -262,33 +204,215 @@ impl MicrofacetDistribution {
             }
             return;
         }
-        let wi_p = Vec3::new(self.alpha_u * wi.x, self.alpha_v * wi.y, wi.z).normalize();
+        let d = self.r();
+        let wi_p = d.stretched(wi.into());
         let (sin_phi, cos_phi) = sincos_phi(wi_p);
         let slopes_y: Vec<f32> = ys.iter().map(|&y| beckmann_slope_y(y)).collect();
         for (i, &x) in xs.iter().enumerate() {
             let slope_x = beckmann_slope_x(wi_p.z, x);
             for (j, &slope_y) in slopes_y.iter().enumerate() {
-                let m = self.unstretch(sin_phi, cos_phi, Vec2::new(slope_x, slope_y));
-                f(i, j, m.unwrap_or(Vec3::Z));
+                let (m, finite) = d.unstretch(sin_phi, cos_phi, Vector2::new(slope_x, slope_y));
+                f(i, j, if finite { m.into() } else { Vec3::Z });
             }
         }
     }
 
-    /// Slopes of the visible normals of the α = 1 distribution seen under cos θ_i.
-    fn sample_visible_11(&self, cos_theta_i: f32, u: Vec2) -> Vec2 {
+    /// Smith's G1 (see [`MicrofacetDistributionR::smith_g1`]).
+    #[inline]
+    pub fn smith_g1(&self, v: Vec3, m: Vec3) -> f32 {
+        self.r().smith_g1(v.into(), m.into())
+    }
+
+    /// Smith's Λ (see [`MicrofacetDistributionR::lambda`]).
+    #[inline]
+    pub fn lambda(&self, v: Vec3) -> f32 {
+        self.r().lambda(v.into())
+    }
+
+    /// The masking-shadowing G(wi, wo, m) of the given form.
+    #[inline]
+    pub fn g(&self, wi: Vec3, wo: Vec3, m: Vec3, form: Shadowing) -> f32 {
+        self.r().g(wi.into(), wo.into(), m.into(), form)
+    }
+}
+
+impl<R: Real> MicrofacetDistributionR<R> {
+    /// The same distribution with both roughnesses multiplied by `s` (Mitsuba's `scale_alpha`).
+    #[inline(always)]
+    pub fn scaled(&self, s: R) -> Self {
+        Self {
+            alpha_u: self.alpha_u * s,
+            alpha_v: self.alpha_v * s,
+            ..*self
+        }
+    }
+
+    /// D(m): microfacet area per unit projected area and solid angle of normals.
+    #[inline(always)]
+    pub fn eval(&self, m: Vector3<R>) -> R {
+        let (au, av) = (self.alpha_u, self.alpha_v);
+        let cos2 = m.z * m.z;
+        let x = m.x / au;
+        let y = m.y / av;
+        let pi = R::splat(PI);
+        let d = match self.kind {
+            MicrofacetType::Beckmann => {
+                exp_neg(-(x * x + y * y) / cos2) / (pi * au * av * cos2 * cos2)
+            }
+            MicrofacetType::Ggx => {
+                let t = x * x + y * y + cos2;
+                R::one() / (pi * au * av * t * t)
+            }
+        };
+        // As Mitsuba: drop tiny values and everything on the lower hemisphere (and NaN).
+        R::select((d * m.z).greater(R::splat(1e-20)), d, R::zero())
+    }
+
+    /// Density (per solid angle of `m`) with which [`Self::sample`] returns `m`.
+    #[inline(always)]
+    pub fn pdf(&self, wi: Vector3<R>, m: Vector3<R>) -> R {
+        self.pdf_given(self.eval(m), wi, m)
+    }
+
+    /// [`Self::pdf`] given D(m) = `d` (`self.eval(m)`), for callers that evaluated it already.
+    #[inline(always)]
+    pub fn pdf_given(&self, d: R, wi: Vector3<R>, m: Vector3<R>) -> R {
+        if self.sample_visible {
+            d * self.visible_g1(wi, m) * wi.dot(m).abs() / wi.z
+        } else {
+            d * m.z
+        }
+    }
+
+    /// (α_u v.x)² + (α_v v.y)²: tan²θ of `v` times α² along its azimuth, times cos²θ.
+    #[inline(always)]
+    fn xy_alpha_2(&self, v: Vector3<R>) -> R {
+        let (x, y) = (self.alpha_u * v.x, self.alpha_v * v.y);
+        x * x + y * y
+    }
+
+    /// The G1 that normalizes the distribution of visible normals, D(m) G1(wi) (wi·m)/cos θi,
+    /// which [`Self::sample`] draws exactly: the exact Smith G1. For GGX that is
+    /// [`Self::smith_g1`]; for Beckmann it is 2/(1 + erf(a) + e^(−a²)/(a√π)), where Mitsuba
+    /// uses the rational approximation (up to 0.35% off) in its pdf too, so that its pdf and
+    /// its sampler disagree by as much. radia evaluates the BSDF with Mitsuba's G (the same
+    /// values) but its pdf and sample weights with this one: sampling stays exact.
+    #[inline(always)]
+    pub fn visible_g1(&self, v: Vector3<R>, m: Vector3<R>) -> R {
         match self.kind {
-            MicrofacetType::Beckmann => beckmann_visible_slopes_11(cos_theta_i, u),
+            MicrofacetType::Ggx => self.smith_g1(v, m),
+            MicrofacetType::Beckmann => {
+                let xy_alpha_2 = self.xy_alpha_2(v);
+                let a = v.z.abs() / xy_alpha_2.sqrt();
+                const SQRT_PI: f32 = 1.772_453_9;
+                let two = R::splat(2.0);
+                let g1 = two / (R::one() + erf(a) + exp_neg(-a * a) / (a * R::splat(SQRT_PI)));
+                let g1 = R::select(xy_alpha_2.equals(R::zero()), R::one(), g1);
+                R::select(back_facing(v, m), R::zero(), g1)
+            }
+        }
+    }
+
+    /// Samples a microfacet normal (for `wi` on the upper side); returns it with its density.
+    /// The density is 0 (and the normal possibly not finite) when sampling failed.
+    #[inline(always)]
+    pub fn sample(&self, wi: Vector3<R>, u: Vector2<R>) -> (Vector3<R>, R) {
+        if self.sample_visible {
+            self.sample_visible_normal(wi, u)
+        } else {
+            self.sample_all_normals(u)
+        }
+    }
+
+    /// D(m) cos θ_m sampling (Walter et al. 2007), isotropic or anisotropic.
+    #[inline(always)]
+    fn sample_all_normals(&self, u: Vector2<R>) -> (Vector3<R>, R) {
+        let (au, av) = (self.alpha_u, self.alpha_v);
+        let (s, c) = trig::sin_cos_turns(u.y);
+        let (sin_phi, cos_phi, alpha_2) = select_lazy(
+            au.equals(av),
+            || (s, c, au * au),
+            || {
+                // The azimuth of an elliptical distribution, tan φ' = (αv/αu) tan 2πu in the
+                // quadrant of 2πu: the direction of (αu cos 2πu, αv sin 2πu). (Mitsuba takes
+                // tan 2πu and restores the quadrant; this form has no pole at a quarter turn.)
+                let (x, y) = (au * c, av * s);
+                let inv = R::one() / (x * x + y * y).sqrt();
+                let (cos_phi, sin_phi) = (x * inv, y * inv);
+                let (cu, sv) = (cos_phi / au, sin_phi / av);
+                (sin_phi, cos_phi, R::one() / (cu * cu + sv * sv))
+            },
+        );
+        let one = R::one();
+        let pi_au_av = R::splat(PI) * au * av;
+        let (cos_theta, pdf) = match self.kind {
+            MicrofacetType::Beckmann => {
+                let cos_theta = one / (one - alpha_2 * (one - u.x).ln()).sqrt();
+                let cos3 = (cos_theta * cos_theta * cos_theta).max(R::splat(1e-20));
+                (cos_theta, (one - u.x) / (pi_au_av * cos3))
+            }
+            MicrofacetType::Ggx => {
+                let tan2 = alpha_2 * u.x / (one - u.x);
+                let cos_theta = one / (one + tan2).sqrt();
+                let temp = one + tan2 / alpha_2;
+                let cos3 = (cos_theta * cos_theta * cos_theta).max(R::splat(1e-20));
+                (cos_theta, one / (pi_au_av * cos3 * temp * temp))
+            }
+        };
+        let sin_theta = (one - cos_theta * cos_theta).safe_sqrt();
+        (
+            Vector3::new(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta),
+            pdf,
+        )
+    }
+
+    /// `v` stretched to the α = 1 configuration: normalize(α_u x, α_v y, z).
+    #[inline(always)]
+    fn stretched(&self, v: Vector3<R>) -> Vector3<R> {
+        Vector3::new(self.alpha_u * v.x, self.alpha_v * v.y, v.z).normalize()
+    }
+
+    /// Visible normals (Heitz and d'Eon 2014): stretch wi to the α = 1 configuration,
+    /// sample slopes there, rotate and unstretch.
+    #[inline(always)]
+    fn sample_visible_normal(&self, wi: Vector3<R>, u: Vector2<R>) -> (Vector3<R>, R) {
+        let wi_p = self.stretched(wi);
+        let (sin_phi, cos_phi) = sincos_phi(wi_p);
+        let slope = self.sample_visible_11(wi_p.z, u);
+        let (m, finite) = self.unstretch(sin_phi, cos_phi, slope);
+        let m = Vector3::select(finite, m, Vector3::splat(Vec3::Z));
+        let pdf = self.eval(m) * self.visible_g1(wi, m) * wi.dot(m).abs() / wi.z;
+        (m, R::select(finite, pdf, R::zero()))
+    }
+
+    /// The normal of the α = 1 slopes `slope`, rotated to wi's azimuth (φ given by its sine
+    /// and cosine) and unstretched, and where it is finite.
+    #[inline(always)]
+    fn unstretch(&self, sin_phi: R, cos_phi: R, slope: Vector2<R>) -> (Vector3<R>, R::Mask) {
+        let sx = (cos_phi * slope.x - sin_phi * slope.y) * self.alpha_u;
+        let sy = (sin_phi * slope.x + cos_phi * slope.y) * self.alpha_v;
+        let m = Vector3::new(-sx, -sy, R::one()).normalize();
+        (m, m.is_finite())
+    }
+
+    /// Slopes of the visible normals of the α = 1 distribution seen under cos θ_i.
+    #[inline(always)]
+    fn sample_visible_11(&self, cos_theta_i: R, u: Vector2<R>) -> Vector2<R> {
+        match self.kind {
+            MicrofacetType::Beckmann => {
+                Vector2::new(beckmann_slope_x(cos_theta_i, u.x), beckmann_slope_y(u.y))
+            }
             MicrofacetType::Ggx => {
                 // Heitz 2018: a disk sample projected onto the visible half of the
                 // hemisphere as seen from wi, as Mitsuba's GGX branch.
-                let mut p = warp::square_to_uniform_disk_concentric(u);
-                let s = 0.5 * (1.0 + cos_theta_i);
-                p.y = (1.0 - s) * safe_sqrt(1.0 - p.x * p.x) + s * p.y;
-                let (x, y) = (p.x, p.y);
-                let z = safe_sqrt(1.0 - x * x - y * y);
-                let sin_theta_i = safe_sqrt(1.0 - cos_theta_i * cos_theta_i);
-                let norm = 1.0 / (sin_theta_i * y + cos_theta_i * z);
-                Vec2::new((cos_theta_i * y - sin_theta_i * z) * norm, x * norm)
+                let one = R::one();
+                let p = warp::square_to_uniform_disk_concentric_r(u);
+                let s = R::splat(0.5) * (one + cos_theta_i);
+                let (x, y) = (p.x, (one - s) * (one - p.x * p.x).safe_sqrt() + s * p.y);
+                let z = (one - x * x - y * y).safe_sqrt();
+                let sin_theta_i = (one - cos_theta_i * cos_theta_i).safe_sqrt();
+                let norm = one / (sin_theta_i * y + cos_theta_i * z);
+                Vector2::new((cos_theta_i * y - sin_theta_i * z) * norm, x * norm)
             }
         }
     }
@@ -296,180 +420,178 @@ impl MicrofacetDistribution {
     /// Smith's G1 for direction `v` and microfacet normal `m` (Mitsuba's `smith_g1`:
     /// the exact GGX form, Walter's rational approximation for Beckmann), 0 when `v` sees
     /// the back of the microfacet.
-    #[inline]
-    pub fn smith_g1(&self, v: Vec3, m: Vec3) -> f32 {
-        if v.dot(m) * v.z <= 0.0 {
-            return 0.0;
-        }
-        let xy_alpha_2 = (self.alpha_u * v.x).powi(2) + (self.alpha_v * v.y).powi(2);
-        if xy_alpha_2 == 0.0 {
-            return 1.0;
-        }
+    #[inline(always)]
+    pub fn smith_g1(&self, v: Vector3<R>, m: Vector3<R>) -> R {
+        let xy_alpha_2 = self.xy_alpha_2(v);
         let tan_theta_alpha_2 = xy_alpha_2 / (v.z * v.z);
-        match self.kind {
+        let one = R::one();
+        let g1 = match self.kind {
             MicrofacetType::Beckmann => {
-                let a = 1.0 / tan_theta_alpha_2.sqrt();
-                if a >= 1.6 {
-                    1.0
-                } else {
-                    (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
-                }
+                let a = one / tan_theta_alpha_2.sqrt();
+                let k = R::splat;
+                let g1 =
+                    (k(3.535) * a + k(2.181) * a * a) / (one + k(2.276) * a + k(2.577) * a * a);
+                R::select(a.greater_eq(k(1.6)), one, g1)
             }
-            MicrofacetType::Ggx => 2.0 / (1.0 + (1.0 + tan_theta_alpha_2).sqrt()),
-        }
+            MicrofacetType::Ggx => R::splat(2.0) / (one + (one + tan_theta_alpha_2).sqrt()),
+        };
+        let g1 = R::select(xy_alpha_2.equals(R::zero()), one, g1);
+        R::select(back_facing(v, m), R::zero(), g1)
     }
 
     /// Smith's Λ(v) with G1 = 1/(1 + Λ), for the height-correlated form. For Beckmann it is
     /// the Λ of the same rational approximation, (1 − 1.259a + 0.396a²)/(3.535a + 2.181a²)
     /// (Walter et al. 2007, eq. 27), so both forms agree for one direction.
-    #[inline]
-    pub fn lambda(&self, v: Vec3) -> f32 {
-        let xy_alpha_2 = (self.alpha_u * v.x).powi(2) + (self.alpha_v * v.y).powi(2);
-        if xy_alpha_2 == 0.0 {
-            return 0.0;
-        }
+    #[inline(always)]
+    pub fn lambda(&self, v: Vector3<R>) -> R {
+        let xy_alpha_2 = self.xy_alpha_2(v);
         let tan_theta_alpha_2 = xy_alpha_2 / (v.z * v.z);
-        match self.kind {
+        let (zero, one) = (R::zero(), R::one());
+        let lambda = match self.kind {
             MicrofacetType::Beckmann => {
-                let a = 1.0 / tan_theta_alpha_2.sqrt();
-                if a >= 1.6 {
-                    0.0
-                } else {
-                    (1.0 - 1.259 * a + 0.396 * a * a) / (3.535 * a + 2.181 * a * a)
-                }
+                let a = one / tan_theta_alpha_2.sqrt();
+                let k = R::splat;
+                let l = (one - k(1.259) * a + k(0.396) * a * a) / (k(3.535) * a + k(2.181) * a * a);
+                R::select(a.greater_eq(k(1.6)), zero, l)
             }
-            MicrofacetType::Ggx => 0.5 * ((1.0 + tan_theta_alpha_2).sqrt() - 1.0),
-        }
+            MicrofacetType::Ggx => R::splat(0.5) * ((one + tan_theta_alpha_2).sqrt() - one),
+        };
+        R::select(xy_alpha_2.equals(zero), zero, lambda)
     }
 
     /// The masking-shadowing G(wi, wo, m) of the given form.
-    #[inline]
-    pub fn g(&self, wi: Vec3, wo: Vec3, m: Vec3, form: Shadowing) -> f32 {
+    #[inline(always)]
+    pub fn g(&self, wi: Vector3<R>, wo: Vector3<R>, m: Vector3<R>, form: Shadowing) -> R {
         match form {
             Shadowing::Separable => self.smith_g1(wi, m) * self.smith_g1(wo, m),
             Shadowing::HeightCorrelated => {
-                if wi.dot(m) * wi.z <= 0.0 || wo.dot(m) * wo.z <= 0.0 {
-                    0.0
-                } else {
-                    1.0 / (1.0 + self.lambda(wi) + self.lambda(wo))
-                }
+                let g = R::one() / (R::one() + self.lambda(wi) + self.lambda(wo));
+                R::select(back_facing(wi, m) | back_facing(wo, m), R::zero(), g)
             }
         }
     }
 }
 
+/// Whether `v` sees the back of the microfacet `m` (or is in the surface): (v·m) cos θ ≤ 0.
+#[inline(always)]
+fn back_facing<R: Real>(v: Vector3<R>, m: Vector3<R>) -> R::Mask {
+    (v.dot(m) * v.z).less_eq(R::zero())
+}
+
 /// (sin φ, cos φ) of a direction, (0, 1) on the pole (Mitsuba's `Frame3f::sincos_phi`).
-#[inline]
-fn sincos_phi(v: Vec3) -> (f32, f32) {
+#[inline(always)]
+fn sincos_phi<R: Real>(v: Vector3<R>) -> (R, R) {
     let sin2 = v.x * v.x + v.y * v.y;
-    if sin2 <= 4.0 * f32::EPSILON {
-        return (0.0, 1.0);
-    }
-    let inv = 1.0 / sin2.sqrt();
-    ((v.y * inv).clamp(-1.0, 1.0), (v.x * inv).clamp(-1.0, 1.0))
+    let inv = R::one() / sin2.sqrt();
+    let (one, zero) = (R::one(), R::zero());
+    let pole = sin2.less_eq(R::splat(4.0 * f32::EPSILON));
+    (
+        R::select(pole, zero, (v.y * inv).clamp(-one, one)),
+        R::select(pole, one, (v.x * inv).clamp(-one, one)),
+    )
 }
 
-/// Visible slopes of the α = 1 Beckmann distribution (Jakob 2014), as Mitsuba's
-/// `sample_visible_11`: the x slope inverts the visible-slope CDF numerically in the erf
-/// domain from an analytic initial guess with three Newton steps, the y slope is Gaussian.
-fn beckmann_visible_slopes_11(cos_theta_i: f32, u: Vec2) -> Vec2 {
-    Vec2::new(beckmann_slope_x(cos_theta_i, u.x), beckmann_slope_y(u.y))
-}
-
-/// The x slope of [`beckmann_visible_slopes_11`].
-#[inline]
-fn beckmann_slope_x(cos_theta_i: f32, u: f32) -> f32 {
+/// The x slope of the visible normals of the α = 1 Beckmann distribution (Jakob 2014), as
+/// Mitsuba's `sample_visible_11`: the visible-slope CDF inverted numerically in the erf
+/// domain from an analytic initial guess with three Newton steps.
+#[inline(always)]
+fn beckmann_slope_x<R: Real>(cos_theta_i: R, u: R) -> R {
     const INV_SQRT_PI: f32 = 0.564_189_6;
-    let tan_theta_i = safe_sqrt(1.0 - cos_theta_i * cos_theta_i) / cos_theta_i;
-    let cot_theta_i = 1.0 / tan_theta_i;
+    let (one, k) = (R::one(), R::splat);
+    let tan_theta_i = (one - cos_theta_i * cos_theta_i).safe_sqrt() / cos_theta_i;
+    let cot_theta_i = one / tan_theta_i;
+    let tan_over_sqrt_pi = k(INV_SQRT_PI) * tan_theta_i;
 
     // Search interval: everything is parameterized in the erf() domain.
     let maxval = erf(cot_theta_i);
-    let u = u.clamp(1e-6, 1.0 - 1e-6);
+    let u = u.clamp(k(1e-6), k(1.0 - 1e-6));
     // Initial guess: the analytic solution for θ_i = π/2, the most nonlinear case.
-    let mut x = maxval - (maxval + 1.0) * erf((-u.ln()).sqrt());
+    let mut x = maxval - (maxval + one) * erf((-u.ln()).sqrt());
     // Normalization of the CDF.
-    let target =
-        u * (1.0 + maxval + INV_SQRT_PI * tan_theta_i * exp_neg(-cot_theta_i * cot_theta_i));
+    let target = u * (one + maxval + tan_over_sqrt_pi * exp_neg(-cot_theta_i * cot_theta_i));
     for _ in 0..3 {
         let slope = erfinv(x);
-        let value = 1.0 + x + INV_SQRT_PI * tan_theta_i * exp_neg(-slope * slope) - target;
-        let derivative = 1.0 - slope * tan_theta_i;
+        let value = one + x + tan_over_sqrt_pi * exp_neg(-slope * slope) - target;
+        let derivative = one - slope * tan_theta_i;
         x -= value / derivative;
     }
     erfinv(x)
 }
 
-/// The y slope of [`beckmann_visible_slopes_11`]: Gaussian.
-#[inline]
-fn beckmann_slope_y(u: f32) -> f32 {
-    erfinv(2.0 * u.clamp(1e-6, 1.0 - 1e-6) - 1.0)
+/// The y slope of the visible normals of the α = 1 Beckmann distribution: Gaussian.
+#[inline(always)]
+fn beckmann_slope_y<R: Real>(u: R) -> R {
+    let k = R::splat;
+    erfinv(k(2.0) * u.clamp(k(1e-6), k(1.0 - 1e-6)) - R::one())
 }
 
-/// e^x for the Gaussians' x ≤ 0, bit for bit `x.exp()`: below −104, where e^x is less
-/// than half the smallest subnormal and so rounds to 0, without calling libm, whose
-/// underflow path (setting `errno`) was 2% of `scenes/veach-mis.xml` (Beckmann sampling
-/// at near-normal incidence takes e^(−cot²θ) with cot θ above 10).
-#[inline]
-fn exp_neg(x: f32) -> f32 {
-    if x < -104.0 {
-        0.0
-    } else {
-        x.exp()
-    }
+/// e^x for the Gaussians' x ≤ 0: [`Real::exp`], which is `x.exp()` bit for bit (glibc's
+/// algorithm without the call: libm's underflow path, setting `errno`, was 2% of
+/// `scenes/veach-mis.xml`, where Beckmann sampling at near-normal incidence takes
+/// e^(−cot²θ) with cot θ above 10).
+#[inline(always)]
+fn exp_neg<R: Real>(x: R) -> R {
+    x.exp()
 }
 
 /// The error function: Abramowitz and Stegun's 7.1.26 (absolute error below 1.5·10⁻⁷).
-pub(crate) fn erf(x: f32) -> f32 {
+#[inline(always)]
+pub(crate) fn erf<R: Real>(x: R) -> R {
+    let k = R::splat;
     let z = x.abs();
-    let t = 1.0 / (1.0 + 0.327_591_1 * z);
+    let t = R::one() / (R::one() + k(0.327_591_1) * z);
     let poly = t
-        * (0.254_829_6
-            + t * (-0.284_496_74 + t * (1.421_413_8 + t * (-1.453_152 + t * 1.061_405_4))));
-    let y = 1.0 - poly * exp_neg(-z * z);
-    if x.is_nan() {
-        x
-    } else if x < 0.0 {
-        -y
-    } else {
-        y
-    }
+        * (k(0.254_829_6)
+            + t * (k(-0.284_496_74)
+                + t * (k(1.421_413_8) + t * (k(-1.453_152) + t * k(1.061_405_4)))));
+    let y = R::one() - poly * exp_neg(-z * z);
+    let y = R::select(x.less(R::zero()), -y, y);
+    R::select(x.equals(x), y, x)
 }
 
 /// The inverse of the error function on (−1, 1): M. Giles' single-precision approximation
 /// ("Approximating the erfinv function", GPU Computing Gems, 2011), relative error about
 /// 3·10⁻⁷. Inputs are clamped into (−1, 1), so it saturates at about ±3.9 rather than
-/// returning infinities.
-pub(crate) fn erfinv(y: f32) -> f32 {
-    if y.is_nan() {
-        return 0.0;
-    }
-    let y = y.clamp(-1.0 + f32::EPSILON, 1.0 - f32::EPSILON);
-    let mut w = -((1.0 - y) * (1.0 + y)).ln();
-    let p = if w < 5.0 {
-        w -= 2.5;
-        let mut p = 2.810_226_4e-08;
-        p = 3.432_739_4e-07 + p * w;
-        p = -3.523_387_7e-06 + p * w;
-        p = -4.391_506_5e-06 + p * w;
-        p = 0.000_218_580_87 + p * w;
-        p = -0.001_253_725 + p * w;
-        p = -0.004_177_681_6 + p * w;
-        p = 0.246_640_73 + p * w;
-        1.501_409_4 + p * w
-    } else {
-        w = w.sqrt() - 3.0;
-        let mut p = -0.000_200_214_26;
-        p = 0.000_100_950_56 + p * w;
-        p = 0.001_349_343_2 + p * w;
-        p = -0.003_673_428_4 + p * w;
-        p = 0.005_739_507_7 + p * w;
-        p = -0.007_622_461 + p * w;
-        p = 0.009_438_870_5 + p * w;
-        p = 1.001_674_1 + p * w;
-        2.832_976_8 + p * w
-    };
-    p * y
+/// returning infinities; NaN gives 0.
+#[inline(always)]
+pub(crate) fn erfinv<R: Real>(y: R) -> R {
+    let k = R::splat;
+    let is_nan = !y.equals(y);
+    let y = y.clamp(k(-1.0 + f32::EPSILON), k(1.0 - f32::EPSILON));
+    let w = -((R::one() - y) * (R::one() + y)).ln();
+    let horner = |w: R, c: &[f32]| c[1..].iter().fold(k(c[0]), |p, &c| k(c) + p * w);
+    let p = select_lazy(
+        w.less(k(5.0)),
+        || {
+            let c = [
+                2.810_226_4e-08,
+                3.432_739_4e-07,
+                -3.523_387_7e-06,
+                -4.391_506_5e-06,
+                0.000_218_580_87,
+                -0.001_253_725,
+                -0.004_177_681_6,
+                0.246_640_73,
+                1.501_409_4,
+            ];
+            horner(w - k(2.5), &c)
+        },
+        || {
+            let c = [
+                -0.000_200_214_26,
+                0.000_100_950_56,
+                0.001_349_343_2,
+                -0.003_673_428_4,
+                0.005_739_507_7,
+                -0.007_622_461,
+                0.009_438_870_5,
+                1.001_674_1,
+                2.832_976_8,
+            ];
+            horner(w.sqrt() - k(3.0), &c)
+        },
+    );
+    R::select(is_nan, R::zero(), p * y)
 }
 
 #[cfg(test)]

@@ -14,12 +14,17 @@
 //! G is Smith's separable G1(wi)·G1(wo) as Mitsuba's, or (radia's `height_correlated`
 //! option) the height-correlated 1/(1 + Λ(wi) + Λ(wo)). One-sided. Sampled through the
 //! microfacet normal (visible normals by default) and mirrored, with the 1/(4 wo·h)
-//! Jacobian of the half-vector map.
+//! Jacobian of the half-vector map. Written once over [`Real`] (`eval_pdf_r`, `sample_r`)
+//! for one path or a packet's lanes; the microfacet reflection pieces here are shared with
+//! the plastics and Cook–Torrance.
 
-use crate::fresnel::{fresnel_conductor, reflect_about};
-use crate::microfacet::{MicrofacetDistribution, RoughnessTextures, Shadowing};
-use crate::{BsdfSample, LobeFlags, ShadingPoint, Texture};
+use crate::fresnel::{fresnel_conductor_r, reflect_about_r};
+use crate::microfacet::{
+    MicrofacetDistribution, MicrofacetDistributionR, RoughnessTextures, Shadowing,
+};
+use crate::{BsdfSample, BsdfSampleR, LobeFlags, ShadingPoint, ShadingPointR, Texture};
 use glam::{Vec2, Vec3};
+use radia_math::real::{Mask, Real, Vector2, Vector3};
 use radia_math::Spectrum;
 
 #[derive(Clone, Debug)]
@@ -33,8 +38,124 @@ pub struct RoughConductor {
     pub specular_reflectance: Texture,
 }
 
-/// D(h) G(wi, wo, h) / (4 cos θi) and h for reflection from `wi` to `wo` on the upper side:
-/// the microfacet reflection term without Fresnel. None where it is zero.
+/// The half vector of a reflection from `wi` to `wo` and D there: what the value and the
+/// density of microfacet reflection share.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct HalfVector<R: Real> {
+    /// Both directions above the surface (elsewhere both are zero).
+    pub above: R::Mask,
+    pub h: Vector3<R>,
+    /// D(h).
+    pub d: R,
+}
+
+impl<R: Real> HalfVector<R> {
+    /// None when no lane has both directions above the surface (then every value and
+    /// density is zero: the one path returns early, as a branch).
+    #[inline(always)]
+    pub fn new(dist: &MicrofacetDistributionR<R>, wi: Vector3<R>, wo: Vector3<R>) -> Option<Self> {
+        let zero = R::zero();
+        let above = wi.z.greater(zero) & wo.z.greater(zero);
+        if !above.any() {
+            return None;
+        }
+        let h = (wi + wo).normalize();
+        Some(Self {
+            above,
+            h,
+            d: dist.eval(h),
+        })
+    }
+}
+
+/// D(h) G(wi, wo, h) / (4 cos θi): the microfacet reflection term without Fresnel, and the
+/// lanes where it is positive and finite (it counts as zero elsewhere).
+#[inline(always)]
+pub(crate) fn microfacet_reflection_r<R: Real>(
+    dist: &MicrofacetDistributionR<R>,
+    shadowing: Shadowing,
+    wi: Vector3<R>,
+    wo: Vector3<R>,
+    hv: &HalfVector<R>,
+) -> (R, R::Mask) {
+    let zero = R::zero();
+    let g = dist.g(wi, wo, hv.h, shadowing);
+    let v = hv.d * g / (R::splat(4.0) * wi.z);
+    let ok = hv.above & hv.d.greater(zero) & v.greater(zero) & v.is_finite();
+    (v, ok)
+}
+
+/// Density of [`sample_microfacet_reflection_r`] at `wo` (0 where it is not finite).
+#[inline(always)]
+pub(crate) fn microfacet_reflection_pdf_r<R: Real>(
+    dist: &MicrofacetDistributionR<R>,
+    wi: Vector3<R>,
+    wo: Vector3<R>,
+    hv: &HalfVector<R>,
+) -> R {
+    let (zero, four) = (R::zero(), R::splat(4.0));
+    let h = hv.h;
+    // The sidedness checks smith_g1 makes in eval and sample, replicated (as Mitsuba).
+    let facing = wi.dot(h).greater(zero) & wo.dot(h).greater(zero);
+    let p = if dist.sample_visible {
+        hv.d * dist.visible_g1(wi, h) / (four * wi.z)
+    } else {
+        dist.pdf_given(hv.d, wi, h) / (four * wo.dot(h))
+    };
+    R::select(hv.above & facing & p.is_finite(), p, zero)
+}
+
+/// A microfacet reflection sample: the direction, the microfacet normal, the density and
+/// the weight without Fresnel (eval/pdf divided by F), in the lanes of `valid`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct MicrofacetSample<R: Real> {
+    pub wo: Vector3<R>,
+    pub m: Vector3<R>,
+    pub pdf: R,
+    pub weight: R,
+    /// Lanes with a sample: not below the surface, not from a back-facing microfacet.
+    pub valid: R::Mask,
+}
+
+/// Samples a microfacet normal and mirrors `wi` about it (Mitsuba's roughconductor `sample`).
+#[inline(always)]
+pub(crate) fn sample_microfacet_reflection_r<R: Real>(
+    dist: &MicrofacetDistributionR<R>,
+    shadowing: Shadowing,
+    wi: Vector3<R>,
+    u: Vector2<R>,
+) -> MicrofacetSample<R> {
+    let zero = R::zero();
+    let (m, pdf_m) = dist.sample(wi, u);
+    let wo = reflect_about_r(wi, m);
+    let weight = if dist.sample_visible {
+        // D G / (4 cos θi) over D G1(wi) / (4 cos θi): for GGX with the separable G this is
+        // Mitsuba's G1(wo); for Beckmann the pdf's exact G1 does not cancel Mitsuba's
+        // rational one (see `MicrofacetDistributionR::visible_g1`).
+        dist.g(wi, wo, m, shadowing) / dist.visible_g1(wi, m)
+    } else {
+        dist.g(wi, wo, m, shadowing) * wi.dot(m) / (wi.z * m.z)
+    };
+    // Jacobian of the half-direction mapping.
+    let pdf = pdf_m / (R::splat(4.0) * wo.dot(m));
+    let valid = wi.z.greater(zero)
+        & pdf_m.greater(zero)
+        & wi.dot(m).greater(zero)
+        & wo.z.greater(zero)
+        & weight.greater(zero)
+        & weight.is_finite()
+        & pdf.greater(zero)
+        & pdf.is_finite();
+    MicrofacetSample {
+        wo,
+        m,
+        pdf,
+        weight,
+        valid,
+    }
+}
+
+/// One path's [`microfacet_reflection_r`] and the half vector, None where it is zero.
 #[inline]
 pub(crate) fn microfacet_reflection(
     d: &MicrofacetDistribution,
@@ -42,111 +163,29 @@ pub(crate) fn microfacet_reflection(
     wi: Vec3,
     wo: Vec3,
 ) -> Option<(f32, Vec3)> {
-    if !(wi.z > 0.0 && wo.z > 0.0) {
-        return None;
-    }
-    let h = (wi + wo).normalize();
-    microfacet_reflection_at(d, shadowing, wi, wo, h, d.eval(h))
+    let (dist, wi, wo) = (d.splat::<f32>(), wi.into(), wo.into());
+    let hv = HalfVector::new(&dist, wi, wo)?;
+    let (v, ok) = microfacet_reflection_r(&dist, shadowing, wi, wo, &hv);
+    ok.then(|| (v, hv.h.into()))
 }
 
-/// [`microfacet_reflection`] given the half vector `h` and D(h) = `dh` (for wi, wo above).
-#[inline]
-fn microfacet_reflection_at(
-    d: &MicrofacetDistribution,
-    shadowing: Shadowing,
-    wi: Vec3,
-    wo: Vec3,
-    h: Vec3,
-    dh: f32,
-) -> Option<(f32, Vec3)> {
-    if !(dh > 0.0) {
-        return None;
-    }
-    let g = d.g(wi, wo, h, shadowing);
-    let v = dh * g / (4.0 * wi.z);
-    (v > 0.0 && v.is_finite()).then_some((v, h))
-}
-
-/// Density of [`sample_microfacet_reflection`] at `wo`.
+/// One path's [`microfacet_reflection_pdf_r`].
 #[inline]
 pub(crate) fn microfacet_reflection_pdf(d: &MicrofacetDistribution, wi: Vec3, wo: Vec3) -> f32 {
-    if !(wi.z > 0.0 && wo.z > 0.0) {
-        return 0.0;
-    }
-    let h = (wi + wo).normalize();
-    microfacet_reflection_pdf_at(d, wi, wo, h, || d.eval(h))
+    let (dist, wi, wo) = (d.splat::<f32>(), wi.into(), wo.into());
+    HalfVector::new(&dist, wi, wo).map_or(0.0, |hv| microfacet_reflection_pdf_r(&dist, wi, wo, &hv))
 }
 
-/// [`microfacet_reflection_pdf`] given the half vector `h` and D(h) (`dh`, asked for only
-/// where needed), for wi, wo above.
-#[inline]
-fn microfacet_reflection_pdf_at(
-    d: &MicrofacetDistribution,
-    wi: Vec3,
-    wo: Vec3,
-    h: Vec3,
-    dh: impl FnOnce() -> f32,
-) -> f32 {
-    // The sidedness checks smith_g1 makes in eval and sample, replicated (as Mitsuba).
-    if !(wi.dot(h) > 0.0 && wo.dot(h) > 0.0) {
-        return 0.0;
-    }
-    let p = if d.sample_visible {
-        dh() * d.visible_g1(wi, h) / (4.0 * wi.z)
-    } else {
-        d.pdf_given(dh(), wi, h) / (4.0 * wo.dot(h))
-    };
-    if p.is_finite() {
-        p
-    } else {
-        0.0
-    }
-}
-
-/// A microfacet reflection sample: the direction, the microfacet normal, the density and
-/// the weight without Fresnel (eval/pdf divided by F).
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct MicrofacetSample {
-    pub wo: Vec3,
-    pub m: Vec3,
-    pub pdf: f32,
-    pub weight: f32,
-}
-
-/// Samples a microfacet normal and mirrors `wi` about it (Mitsuba's roughconductor `sample`).
-/// None when the sample is invalid (below the surface, back-facing microfacet).
+/// One path's [`sample_microfacet_reflection_r`]: (wo, m, pdf, weight), None where invalid.
 #[inline]
 pub(crate) fn sample_microfacet_reflection(
     d: &MicrofacetDistribution,
     shadowing: Shadowing,
     wi: Vec3,
     u: Vec2,
-) -> Option<MicrofacetSample> {
-    if !(wi.z > 0.0) {
-        return None;
-    }
-    let (m, pdf_m) = d.sample(wi, u);
-    if !(pdf_m > 0.0) || !(wi.dot(m) > 0.0) {
-        return None;
-    }
-    let wo = reflect_about(wi, m);
-    if !(wo.z > 0.0) {
-        return None;
-    }
-    let weight = if d.sample_visible {
-        // D G / (4 cos θi) over D G1(wi) / (4 cos θi): for GGX with the separable G this is
-        // Mitsuba's G1(wo); for Beckmann the pdf's exact G1 does not cancel Mitsuba's
-        // rational one (see `MicrofacetDistribution::visible_g1`).
-        d.g(wi, wo, m, shadowing) / d.visible_g1(wi, m)
-    } else {
-        d.g(wi, wo, m, shadowing) * wi.dot(m) / (wi.z * m.z)
-    };
-    // Jacobian of the half-direction mapping.
-    let pdf = pdf_m / (4.0 * wo.dot(m));
-    if !(weight > 0.0) || !weight.is_finite() || !(pdf > 0.0) || !pdf.is_finite() {
-        return None;
-    }
-    Some(MicrofacetSample { wo, m, pdf, weight })
+) -> Option<MicrofacetSample<f32>> {
+    let s = sample_microfacet_reflection_r(&d.splat::<f32>(), shadowing, wi.into(), u.into());
+    s.valid.then_some(s)
 }
 
 impl RoughConductor {
@@ -183,55 +222,93 @@ impl RoughConductor {
 
     #[inline]
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
-        let dist = self.distribution.at(&self.roughness, sp);
-        match microfacet_reflection(&dist, self.shadowing, wi, wo) {
-            Some((v, h)) => {
-                fresnel_conductor(wi.dot(h), self.eta, self.k)
-                    * self.specular_reflectance.eval(sp)
-                    * v
-            }
-            None => Spectrum::ZERO,
-        }
+        let sp = sp.into();
+        let dist = self.distribution.at_r(&self.roughness, &sp);
+        HalfVector::new(&dist, wi.into(), wo.into()).map_or(Spectrum::ZERO, |hv| {
+            self.value(&sp, &dist, wi.into(), wo.into(), &hv).into()
+        })
     }
 
     #[inline]
     pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        microfacet_reflection_pdf(&self.distribution.at(&self.roughness, sp), wi, wo)
+        let dist = self.distribution.at_r(&self.roughness, &sp.into());
+        HalfVector::new(&dist, wi.into(), wo.into()).map_or(0.0, |hv| {
+            microfacet_reflection_pdf_r(&dist, wi.into(), wo.into(), &hv)
+        })
     }
 
     /// [`RoughConductor::eval`] and [`RoughConductor::pdf`] at once: the roughness
     /// textures, the half vector and D(h) found once. The same values bit for bit.
     #[inline]
     pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
-        let dist = self.distribution.at(&self.roughness, sp);
-        if !(wi.z > 0.0 && wo.z > 0.0) {
-            return (Spectrum::ZERO, 0.0);
-        }
-        let h = (wi + wo).normalize();
-        let dh = dist.eval(h);
-        let value = match microfacet_reflection_at(&dist, self.shadowing, wi, wo, h, dh) {
-            Some((v, h)) => {
-                fresnel_conductor(wi.dot(h), self.eta, self.k)
-                    * self.specular_reflectance.eval(sp)
-                    * v
-            }
-            None => Spectrum::ZERO,
-        };
-        (value, microfacet_reflection_pdf_at(&dist, wi, wo, h, || dh))
+        let (f, pdf) = self.eval_pdf_r(&sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
     }
 
     #[inline]
-    pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, _u1: f32, u2: Vec2) -> Option<BsdfSample> {
-        let dist = self.distribution.at(&self.roughness, sp);
-        let s = sample_microfacet_reflection(&dist, self.shadowing, wi, u2)?;
-        let f = fresnel_conductor(wi.dot(s.m), self.eta, self.k);
-        Some(BsdfSample {
+    pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
+        self.sample_r(&sp.into(), wi.into(), u1, u2.into())
+            .one_path(LobeFlags::GLOSSY_REFLECTION)
+    }
+
+    /// F(wi·h) R D(h) G / (4 cos θi), zero where the microfacet term is.
+    #[inline(always)]
+    fn value<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        dist: &MicrofacetDistributionR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+        hv: &HalfVector<R>,
+    ) -> Vector3<R> {
+        let (v, ok) = microfacet_reflection_r(dist, self.shadowing, wi, wo, hv);
+        let f = fresnel_conductor_r(wi.dot(hv.h), self.eta, self.k)
+            * self.specular_reflectance.eval_r(sp)
+            * v;
+        Vector3::select(ok, f, Vector3::zero())
+    }
+
+    /// eval and pdf over any [`Real`].
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        let dist = self.distribution.at_r(&self.roughness, sp);
+        match HalfVector::new(&dist, wi, wo) {
+            None => (Vector3::zero(), R::zero()),
+            Some(hv) => (
+                self.value(sp, &dist, wi, wo, &hv),
+                microfacet_reflection_pdf_r(&dist, wi, wo, &hv),
+            ),
+        }
+    }
+
+    /// sample over any [`Real`]: a microfacet normal, `wi` mirrored about it.
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        _u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        if !wi.z.greater(R::zero()).any() {
+            return BsdfSampleR::none();
+        }
+        let dist = self.distribution.at_r(&self.roughness, sp);
+        let s = sample_microfacet_reflection_r(&dist, self.shadowing, wi, u2);
+        let f = fresnel_conductor_r(wi.dot(s.m), self.eta, self.k);
+        BsdfSampleR {
             wo: s.wo,
-            weight: f * self.specular_reflectance.eval(sp) * s.weight,
+            weight: f * self.specular_reflectance.eval_r(sp) * s.weight,
             pdf: s.pdf,
-            eta: 1.0,
-            lobe: LobeFlags::GLOSSY_REFLECTION,
-        })
+            eta: R::one(),
+            valid: s.valid,
+            delta: R::Mask::splat(false),
+        }
     }
 }
 

@@ -11,10 +11,12 @@
 //! straight through (wo = −wi, no refraction, η = 1) with 1 − R'. Two delta lobes, chosen
 //! with these probabilities (weights 1). Mitsuba calls the straight-through lobe `Null`; radia
 //! flags it as delta transmission (both make the integrator treat it as a delta bounce).
+//! Written once over [`Real`] (`eval_pdf_r`, `sample_r`) for one path or a packet's lanes.
 
-use crate::fresnel::{fresnel_dielectric, reflect};
-use crate::{BsdfSample, LobeFlags, ShadingPoint, Texture};
+use crate::fresnel::{fresnel_dielectric_r, reflect_r};
+use crate::{BsdfSample, BsdfSampleR, LobeFlags, ShadingPoint, ShadingPointR, Texture};
 use glam::{Vec2, Vec3};
+use radia_math::real::{Mask, Real, Vector2, Vector3};
 use radia_math::Spectrum;
 
 #[derive(Clone, Debug)]
@@ -40,50 +42,97 @@ impl ThinDielectric {
     /// R' = 2R/(1 + R) with R the Fresnel reflectance at |cos θi|.
     #[inline]
     pub fn reflectance(&self, cos_theta_i: f32) -> f32 {
-        let r = fresnel_dielectric(cos_theta_i.abs(), self.eta).f;
-        r * 2.0 / (1.0 + r)
+        self.reflectance_r(cos_theta_i)
+    }
+
+    /// [`ThinDielectric::reflectance`] over any [`Real`].
+    #[inline(always)]
+    pub fn reflectance_r<R: Real>(&self, cos_theta_i: R) -> R {
+        let r = fresnel_dielectric_r(cos_theta_i.abs(), R::splat(self.eta)).f;
+        r * R::splat(2.0) / (R::one() + r)
     }
 
     #[inline]
-    pub fn eval(&self, _sp: &ShadingPoint, _wi: Vec3, _wo: Vec3) -> Spectrum {
-        Spectrum::ZERO
+    pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
+        self.eval_pdf(sp, wi, wo).0
     }
 
     #[inline]
-    pub fn pdf(&self, _sp: &ShadingPoint, _wi: Vec3, _wo: Vec3) -> f32 {
-        0.0
+    pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
+        self.eval_pdf(sp, wi, wo).1
     }
 
     #[inline]
-    pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, _u2: Vec2) -> Option<BsdfSample> {
-        if !wi.is_finite() {
-            return None;
-        }
-        let r = self.reflectance(wi.z);
-        // Mitsuba selects reflection when u1 ≤ R; `<` never picks a lobe of probability 0.
-        if u1 < r {
-            Some(BsdfSample {
-                wo: reflect(wi),
-                weight: self.specular_reflectance.eval(sp),
-                pdf: r,
-                eta: 1.0,
-                lobe: LobeFlags::DELTA_REFLECTION,
-            })
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let (f, pdf) = self.eval_pdf_r(&sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
+    }
+
+    #[inline]
+    pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
+        let (s, reflected) = self.sample_lobe(&sp.into(), wi.into(), u1, u2.into());
+        s.one_path(if reflected {
+            LobeFlags::DELTA_REFLECTION
         } else {
-            Some(BsdfSample {
-                wo: -wi,
-                weight: self.specular_transmittance.eval(sp),
-                pdf: 1.0 - r,
-                eta: 1.0,
-                lobe: LobeFlags::DELTA_TRANSMISSION,
-            })
-        }
+            LobeFlags::DELTA_TRANSMISSION
+        })
+    }
+
+    /// eval and pdf over any [`Real`]: zero (delta lobes only).
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        _sp: &ShadingPointR<R>,
+        _wi: Vector3<R>,
+        _wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        (Vector3::zero(), R::zero())
+    }
+
+    /// sample over any [`Real`].
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        self.sample_lobe(sp, wi, u1, u2).0
+    }
+
+    /// The sample and the lanes that reflected (the others passed straight through).
+    #[inline(always)]
+    fn sample_lobe<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        _u2: Vector2<R>,
+    ) -> (BsdfSampleR<R>, R::Mask) {
+        let r = self.reflectance_r(wi.z);
+        // Mitsuba selects reflection when u1 ≤ R; `<` never picks a lobe of probability 0.
+        let reflected = u1.less(r);
+        let s = BsdfSampleR {
+            wo: Vector3::select(reflected, reflect_r(wi), -wi),
+            weight: Vector3::select(
+                reflected,
+                self.specular_reflectance.eval_r(sp),
+                self.specular_transmittance.eval_r(sp),
+            ),
+            pdf: R::select(reflected, r, R::one() - r),
+            eta: R::one(),
+            valid: wi.is_finite(),
+            delta: R::Mask::splat(true),
+        };
+        (s, reflected)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fresnel::fresnel_dielectric;
     use crate::testing::*;
     use crate::Bsdf;
 

@@ -9,6 +9,7 @@ mod frame;
 pub mod lanes;
 mod ray;
 pub mod real;
+pub mod special;
 pub mod trig;
 
 pub use frame::Frame;

@@ -103,6 +103,11 @@ pub trait Real:
     fn floor(self) -> Self;
     /// `self` with its sign bit flipped where `m` holds.
     fn negate_where(self, m: Self::Mask) -> Self;
+    /// e^x, as glibc's `expf` computes it ([`crate::special`]): `f32::exp` bit for bit on
+    /// x86-64 glibc with FMA, without its call.
+    fn exp(self) -> Self;
+    /// ln x, as glibc's `logf` computes it ([`crate::special`]).
+    fn ln(self) -> Self;
 
     #[inline(always)]
     fn zero() -> Self {
@@ -238,6 +243,14 @@ impl Real for f32 {
     fn negate_where(self, m: bool) -> Self {
         f32::from_bits(self.to_bits() ^ ((m as u32) << 31))
     }
+    #[inline(always)]
+    fn exp(self) -> Self {
+        crate::special::exp(self, crate::special::exp_kernel::<f32>)
+    }
+    #[inline(always)]
+    fn ln(self) -> Self {
+        crate::special::ln(self, crate::special::ln_kernel_f32)
+    }
 }
 
 /// The masks of `f32x16` are `f32x16` lanes of all ones or all zeros, as the `wide` crate's
@@ -362,6 +375,14 @@ impl Real for f32x16 {
     #[inline(always)]
     fn negate_where(self, m: Self) -> Self {
         self ^ (m & f32x16::splat(-0.0))
+    }
+    #[inline(always)]
+    fn exp(self) -> Self {
+        crate::special::exp(self, crate::special::exp_kernel_f32x16)
+    }
+    #[inline(always)]
+    fn ln(self) -> Self {
+        crate::special::ln(self, crate::special::ln_kernel_f32x16)
     }
 }
 
@@ -630,6 +651,71 @@ impl<R: Real> FrameR<R> {
     }
 }
 
+/// Values that [`Real::select`] chooses between lane by lane: reals, vectors of them, and
+/// tuples of these.
+pub trait Select<R: Real>: Sized {
+    fn select(m: R::Mask, if_true: Self, if_false: Self) -> Self;
+}
+
+impl<R: Real> Select<R> for R {
+    #[inline(always)]
+    fn select(m: R::Mask, if_true: Self, if_false: Self) -> Self {
+        R::select(m, if_true, if_false)
+    }
+}
+
+impl<R: Real> Select<R> for Vector2<R> {
+    #[inline(always)]
+    fn select(m: R::Mask, if_true: Self, if_false: Self) -> Self {
+        Vector2::select(m, if_true, if_false)
+    }
+}
+
+impl<R: Real> Select<R> for Vector3<R> {
+    #[inline(always)]
+    fn select(m: R::Mask, if_true: Self, if_false: Self) -> Self {
+        Vector3::select(m, if_true, if_false)
+    }
+}
+
+impl<R: Real, A: Select<R>, B: Select<R>> Select<R> for (A, B) {
+    #[inline(always)]
+    fn select(m: R::Mask, t: Self, f: Self) -> Self {
+        (A::select(m, t.0, f.0), B::select(m, t.1, f.1))
+    }
+}
+
+impl<R: Real, A: Select<R>, B: Select<R>, C: Select<R>> Select<R> for (A, B, C) {
+    #[inline(always)]
+    fn select(m: R::Mask, t: Self, f: Self) -> Self {
+        (
+            A::select(m, t.0, f.0),
+            B::select(m, t.1, f.1),
+            C::select(m, t.2, f.2),
+        )
+    }
+}
+
+/// `select(m, if_true(), if_false())`, computing only the sides some lane takes: for one
+/// path (`f32`, a `bool` mask) a branch, as the scalar code had; for lanes both sides only
+/// where the lanes disagree. Each lane gets what [`Select::select`] of both sides gives it,
+/// so this is for costly sides (a lobe's sampling, a two-sided model's side); for cheap
+/// ones, and coin tosses a branch would mispredict, [`Real::select`] computes both.
+#[inline(always)]
+pub fn select_lazy<R: Real, T: Select<R>>(
+    m: R::Mask,
+    if_true: impl FnOnce() -> T,
+    if_false: impl FnOnce() -> T,
+) -> T {
+    if m.all() {
+        if_true()
+    } else if !m.any() {
+        if_false()
+    } else {
+        T::select(m, if_true(), if_false())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -683,7 +769,9 @@ mod tests {
             );
             type Op = fn(f32x16, f32x16, f32x16) -> f32x16;
             type Sop = fn(f32, f32, f32) -> f32;
-            let ops: [(&str, Op, Sop); 14] = [
+            let ops: [(&str, Op, Sop); 16] = [
+                ("exp", |a, _, _| Real::exp(a), |a, _, _| Real::exp(a)),
+                ("ln", |a, _, _| Real::ln(a), |a, _, _| Real::ln(a)),
                 ("sqrt", |a, _, _| Real::sqrt(a), |a, _, _| Real::sqrt(a)),
                 ("abs", |a, _, _| Real::abs(a), |a, _, _| Real::abs(a)),
                 ("min", |a, b, _| Real::min(a, b), |a, b, _| Real::min(a, b)),

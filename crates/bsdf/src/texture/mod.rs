@@ -82,6 +82,16 @@ impl Texture {
         }
     }
 
+    /// [`Texture::eval_1`] over any [`Real`]: a constant in every lane, an image or
+    /// checkerboard looked up lane by lane.
+    #[inline(always)]
+    pub fn eval_1_r<R: Real>(&self, sp: &ShadingPointR<R>) -> R {
+        match self {
+            Texture::Constant(c) => R::splat(constant_1(*c)),
+            _ => R::from_fn(|k| self.eval_1(&sp.lane(k))),
+        }
+    }
+
     /// The gradient of [`Texture::eval_1`] with respect to (u, v) (Mitsuba's `eval_1_grad`,
     /// what `bumpmap` needs): zero for constants and for nearest-neighbour images.
     /// `None` for a texture that has no gradient (Mitsuba's checkerboard raises
