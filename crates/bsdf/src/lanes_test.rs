@@ -101,7 +101,13 @@ fn random_lane_bsdf(rng: &mut Pcg32) -> Bsdf {
     let presets = crate::ior::CONDUCTOR_PRESETS;
     let preset = presets[rng.random_range(0..presets.len())];
     let (int_ior, ext_ior) = random_eta(rng);
-    match rng.random_range(0..4) {
+    match rng.random_range(0..5) {
+        4 => {
+            let mut m = RoughDielectric::new(dist, int_ior, ext_ior).with_roughness(roughness);
+            m.specular_reflectance = color(rng);
+            m.specular_transmittance = color(rng);
+            Bsdf::RoughDielectric(m)
+        }
         0 => Bsdf::RoughConductor(
             RoughConductor::new(dist, preset.eta.into(), preset.k.into(), color(rng))
                 .with_roughness(roughness)
