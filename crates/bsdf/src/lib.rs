@@ -448,6 +448,8 @@ impl Bsdf {
             Bsdf::Dielectric(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::ThinDielectric(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::RoughDielectric(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::Plastic(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::RoughPlastic(m) => m.eval_pdf(sp, wi, wo),
             _ => (self.eval(sp, wi, wo), self.pdf(sp, wi, wo)),
         }
     }
@@ -469,6 +471,8 @@ impl Bsdf {
                 | Bsdf::Dielectric(_)
                 | Bsdf::ThinDielectric(_)
                 | Bsdf::RoughDielectric(_)
+                | Bsdf::Plastic(_)
+                | Bsdf::RoughPlastic(_)
         )
     }
 
@@ -487,6 +491,8 @@ impl Bsdf {
             Bsdf::Dielectric(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::ThinDielectric(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::RoughDielectric(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::Plastic(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::RoughPlastic(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             _ => None,
         }
     }
@@ -507,6 +513,8 @@ impl Bsdf {
             Bsdf::Dielectric(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::ThinDielectric(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::RoughDielectric(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::Plastic(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::RoughPlastic(m) => Some(m.sample_r(sp, wi, u1, u2)),
             _ => None,
         }
     }
