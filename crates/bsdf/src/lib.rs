@@ -447,6 +447,9 @@ impl Bsdf {
             Bsdf::Conductor(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::Dielectric(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::ThinDielectric(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::RoughDielectric(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::Plastic(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::RoughPlastic(m) => m.eval_pdf(sp, wi, wo),
             _ => (self.eval(sp, wi, wo), self.pdf(sp, wi, wo)),
         }
     }
@@ -467,6 +470,9 @@ impl Bsdf {
                 | Bsdf::RoughConductor(_)
                 | Bsdf::Dielectric(_)
                 | Bsdf::ThinDielectric(_)
+                | Bsdf::RoughDielectric(_)
+                | Bsdf::Plastic(_)
+                | Bsdf::RoughPlastic(_)
         )
     }
 
@@ -484,6 +490,9 @@ impl Bsdf {
             Bsdf::RoughConductor(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::Dielectric(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::ThinDielectric(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::RoughDielectric(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::Plastic(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::RoughPlastic(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             _ => None,
         }
     }
@@ -503,6 +512,9 @@ impl Bsdf {
             Bsdf::RoughConductor(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::Dielectric(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::ThinDielectric(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::RoughDielectric(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::Plastic(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::RoughPlastic(m) => Some(m.sample_r(sp, wi, u1, u2)),
             _ => None,
         }
     }

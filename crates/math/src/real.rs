@@ -707,7 +707,15 @@ pub fn select_lazy<R: Real, T: Select<R>>(
     if_true: impl FnOnce() -> T,
     if_false: impl FnOnce() -> T,
 ) -> T {
-    if m.all() {
+    if R::LANES == 1 {
+        // One call of each side (a constant condition, gone before this is inlined), so
+        // that the sides inline into the caller as the scalar code's branches did.
+        if m.any() {
+            if_true()
+        } else {
+            if_false()
+        }
+    } else if m.all() {
         if_true()
     } else if !m.any() {
         if_false()
