@@ -125,11 +125,18 @@ fn quadrature_over_visible_normals(
     eta: f32,
     f: impl Fn(Vec3, Vec3) -> f32,
 ) -> f32 {
-    let res = if eta > 1.0 { 32 } else { 128 };
-    let (nodes, weights) = gauss_legendre(res);
-    let u: Vec<f32> = nodes.iter().map(|x| (x * 0.5 + 0.5) as f32).collect();
+    // The two rules, made once (each table row integrates over one of them twice).
+    static RULES: std::sync::OnceLock<[(Vec<f32>, Vec<f64>); 2]> = std::sync::OnceLock::new();
+    let rules = RULES.get_or_init(|| {
+        [32, 128].map(|res| {
+            let (nodes, weights) = gauss_legendre(res);
+            let u = nodes.iter().map(|x| (x * 0.5 + 0.5) as f32).collect();
+            (u, weights)
+        })
+    });
+    let (u, weights) = &rules[usize::from(!(eta > 1.0))];
     let mut sum = 0.0f64;
-    d.visible_normals_grid(wi, &u, &u, |i, j, m| {
+    d.visible_normals_grid(wi, u, u, |i, j, m| {
         let v = f(m, wi);
         if v.is_finite() {
             sum += v as f64 * weights[i] * weights[j] * 0.25;
