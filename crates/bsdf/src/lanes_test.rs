@@ -67,9 +67,19 @@ fn random_eta(rng: &mut Pcg32) -> (f32, f32) {
 
 /// [`random_bsdf`]'s models, and each lane model with parameters at their extremes:
 /// textured and anisotropic roughness, IORs next to 1, textured reflectances.
-fn random_lane_bsdf(rng: &mut Pcg32) -> Bsdf {
+fn random_lane_bsdf(rng: &mut Pcg32, depth: u32) -> Bsdf {
     if rng.random() {
-        return random_bsdf(rng, 2);
+        return random_bsdf(rng, depth);
+    }
+    if depth > 0 && rng.random_range(0..8) == 0 {
+        // Two sides from this generator, reflective ones as the loader allows.
+        let mut side = || loop {
+            let b = random_lane_bsdf(rng, depth - 1);
+            if b.has_r() && !b.flags().intersects(LobeFlags::TRANSMISSION) {
+                return b;
+            }
+        };
+        return Bsdf::TwoSided(TwoSided::new(side(), side()));
     }
     let kind = if rng.random() {
         MicrofacetType::Beckmann
@@ -176,16 +186,21 @@ fn same3(a: Vec3, b: Vec3) -> bool {
 fn lanes_are_the_one_path_bit_for_bit() {
     let mut rng = Pcg32::seed_from_u64(0x1a9e5);
     let mut models = 0;
+    let mut kinds = std::collections::BTreeMap::<String, usize>::new();
     // How often the comparisons had something to compare: lanes with a sample, with a
     // nonzero value, with a positive density.
     let (mut lanes, mut sampled) = (0usize, 0usize);
     let (mut smooth, mut nonzero, mut dense) = (0usize, 0usize, 0usize);
     while models < 600 {
-        let b = random_lane_bsdf(&mut rng);
+        let b = random_lane_bsdf(&mut rng, 2);
         if !b.has_r() {
             continue;
         }
         models += 1;
+        let kind = format!("{b:?}");
+        *kinds
+            .entry(kind[..kind.find('(').unwrap_or(kind.len())].to_string())
+            .or_insert(0) += 1;
         for _ in 0..8 {
             let mut sp = [ShadingPoint::default(); 16];
             let (mut wi, mut wo) = ([Vec3::ZERO; 16], [Vec3::ZERO; 16]);
@@ -290,6 +305,21 @@ fn lanes_are_the_one_path_bit_for_bit() {
                 }
             }
         }
+    }
+    println!("{models} models: {kinds:?}; {lanes} lanes, {sampled} sampled");
+    // Every lane model was drawn, many times.
+    for kind in [
+        "Diffuse",
+        "Conductor",
+        "RoughConductor",
+        "Dielectric",
+        "ThinDielectric",
+        "RoughDielectric",
+        "Plastic",
+        "RoughPlastic",
+        "TwoSided",
+    ] {
+        assert!(kinds.get(kind).copied().unwrap_or(0) >= 10, "{kinds:?}");
     }
     // Not a vacuous pass: many lanes sample and evaluate to something (directions below
     // one-sided models and mirror pairs give nothing).

@@ -264,6 +264,21 @@ impl<R: Real> BsdfSampleR<R> {
     }
 }
 
+/// Lane by lane, the sample of `if_true` or of `if_false` (masks included).
+impl<R: Real> radia_math::real::Select<R> for BsdfSampleR<R> {
+    #[inline(always)]
+    fn select(m: R::Mask, if_true: Self, if_false: Self) -> Self {
+        Self {
+            wo: Vector3::select(m, if_true.wo, if_false.wo),
+            weight: Vector3::select(m, if_true.weight, if_false.weight),
+            pdf: R::select(m, if_true.pdf, if_false.pdf),
+            eta: R::select(m, if_true.eta, if_false.eta),
+            valid: (m & if_true.valid) | (!m & if_false.valid),
+            delta: (m & if_true.delta) | (!m & if_false.delta),
+        }
+    }
+}
+
 impl BsdfSampleR<f32> {
     /// The one-path record: `Some` where the sample is valid, from the lobe the model says
     /// it chose.
@@ -450,6 +465,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::Plastic(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::RoughPlastic(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::TwoSided(m) => m.eval_pdf(sp, wi, wo),
             _ => (self.eval(sp, wi, wo), self.pdf(sp, wi, wo)),
         }
     }
@@ -463,6 +479,9 @@ impl Bsdf {
     /// them otherwise: the packet loop runs those paths one at a time).
     #[inline]
     pub fn has_r(&self) -> bool {
+        if let Bsdf::TwoSided(m) = self {
+            return m.has_r();
+        }
         matches!(
             self,
             Bsdf::Diffuse(_)
@@ -493,6 +512,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::Plastic(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::RoughPlastic(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::TwoSided(m) => m.eval_pdf_r(sp, wi, wo),
             _ => None,
         }
     }
@@ -515,6 +535,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::Plastic(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::RoughPlastic(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::TwoSided(m) => m.sample_r(sp, wi, u1, u2),
             _ => None,
         }
     }

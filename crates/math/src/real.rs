@@ -108,6 +108,9 @@ pub trait Real:
     fn exp(self) -> Self;
     /// ln x, as glibc's `logf` computes it ([`crate::special`]).
     fn ln(self) -> Self;
+    /// x^y for x ≥ 0, as glibc's `powf` computes it ([`crate::special`]; negative x gives
+    /// NaN).
+    fn powf(self, y: Self) -> Self;
 
     #[inline(always)]
     fn zero() -> Self {
@@ -251,6 +254,10 @@ impl Real for f32 {
     fn ln(self) -> Self {
         crate::special::ln(self, crate::special::ln_kernel_f32)
     }
+    #[inline(always)]
+    fn powf(self, y: Self) -> Self {
+        crate::special::pow(self, y, crate::special::pow_kernel_f32)
+    }
 }
 
 /// The masks of `f32x16` are `f32x16` lanes of all ones or all zeros, as the `wide` crate's
@@ -383,6 +390,10 @@ impl Real for f32x16 {
     #[inline(always)]
     fn ln(self) -> Self {
         crate::special::ln(self, crate::special::ln_kernel_f32x16)
+    }
+    #[inline(always)]
+    fn powf(self, y: Self) -> Self {
+        crate::special::pow(self, y, crate::special::pow_kernel_f32x16)
     }
 }
 
@@ -777,7 +788,12 @@ mod tests {
             );
             type Op = fn(f32x16, f32x16, f32x16) -> f32x16;
             type Sop = fn(f32, f32, f32) -> f32;
-            let ops: [(&str, Op, Sop); 16] = [
+            let ops: [(&str, Op, Sop); 17] = [
+                (
+                    "powf",
+                    |a, b, _| Real::powf(a.abs(), b),
+                    |a, b, _| Real::powf(Real::abs(a), b),
+                ),
                 ("exp", |a, _, _| Real::exp(a), |a, _, _| Real::exp(a)),
                 ("ln", |a, _, _| Real::ln(a), |a, _, _| Real::ln(a)),
                 ("sqrt", |a, _, _| Real::sqrt(a), |a, _, _| Real::sqrt(a)),

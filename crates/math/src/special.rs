@@ -1,12 +1,13 @@
-//! e^x and ln x over [`Real`] ([`Real::exp`], [`Real::ln`]), computed as glibc computes
-//! `expf` and `logf` (Szabolcs Nagy's algorithms in `sysdeps/ieee754/flt-32/e_expf.c` and
-//! `e_logf.c`, glibc 2.28 and later, in their FMA builds that x86-64 machines with FMA run):
+//! e^x, ln x and x^y over [`Real`] ([`Real::exp`], [`Real::ln`], [`Real::powf`]), computed
+//! as glibc computes `expf`, `logf` and `powf` (Szabolcs Nagy's algorithms in
+//! `sysdeps/ieee754/flt-32/e_expf.c`, `e_logf.c`, `e_powf.c`, glibc 2.28 and later, in
+//! their FMA builds that x86-64 machines with FMA run; x^y for x ≥ 0 only):
 //! the argument is widened to `f64`, reduced with a 32- or 16-entry table, and a short
 //! polynomial evaluated with fused multiply-adds, so that the `f32` result is bit for bit
 //! the C library's on those machines (tested below against `f32::exp` and `f32::ln`).
 //!
-//! Why these and not a polynomial in `f32`: radia's scalar models called `f32::exp` and
-//! `f32::ln` (and `microfacet::exp_neg` is tested to be `exp` bit for bit), so the one-path
+//! Why these and not a polynomial in `f32`: radia's scalar models called `f32::exp`,
+//! `f32::ln` and `f32::powf` (and `microfacet::exp_neg` is tested to be `exp` bit for bit), so the one-path
 //! renders keep their bits, while the packet loop gets the same values lane by lane without
 //! calling libm sixteen times. glibc's `expf` is not correctly rounded (it differs from the
 //! correctly rounded value for about 170 000 arguments), so no other algorithm gives its
@@ -114,6 +115,43 @@ const LOG_A: [f64; 3] = [
 /// The bits of 0x1.66p-1 ≈ 0.7 (`OFF`): subintervals are counted from it.
 const LOG_OFF: u32 = 0x3f33_0000;
 
+/// `powf`'s log2 table: 1/c and log2 c at the same centres as [`LOG_INVC`]
+/// (`__powf_log2_data.tab`; its 1/c are `logf`'s).
+const POW_LOG2C: [f64; 16] = [
+    f64::from_bits(0xbfdefec65b963019),
+    f64::from_bits(0xbfdb0b6832d4fca4),
+    f64::from_bits(0xbfd7418b0a1fb77b),
+    f64::from_bits(0xbfd39de91a6dcf7b),
+    f64::from_bits(0xbfd01d9bf3f2b631),
+    f64::from_bits(0xbfc97c1d1b3b7af0),
+    f64::from_bits(0xbfc2f9e393af3c9f),
+    f64::from_bits(0xbfb960cbbf788d5c),
+    f64::from_bits(0xbfaa6f9db6475fce),
+    0.0,
+    f64::from_bits(0x3fb338ca9f24f53d),
+    f64::from_bits(0x3fc476a9543891ba),
+    f64::from_bits(0x3fce840b4ac4e4d2),
+    f64::from_bits(0x3fd40645f0c6651c),
+    f64::from_bits(0x3fd88e9c2c1b9ff8),
+    f64::from_bits(0x3fdce0a44eb17bcc),
+];
+/// The polynomial of log2(1 + r) (`__powf_log2_data.poly`).
+const POW_A: [f64; 5] = [
+    f64::from_bits(0x3fd27616c9496e0b),
+    f64::from_bits(0xbfd71969a075c67a),
+    f64::from_bits(0x3fdec70a6ca7badd),
+    f64::from_bits(0xbfe7154748bef6c8),
+    f64::from_bits(0x3ff71547652ab82b),
+];
+/// 1.5·2^52/32: adding it rounds x to a multiple of 1/32 (`shift_scaled`).
+const EXP2_SHIFT: f64 = f64::from_bits(0x42e8000000000000);
+/// The polynomial of 2^r − 1 (`__exp2f_data.poly`).
+const EXP2_C: [f64; 3] = [
+    f64::from_bits(0x3fac6af84b912394),
+    f64::from_bits(0x3fcebfce50fac4f3),
+    f64::from_bits(0x3fe62e42ff0c52d6),
+];
+
 /// The lanes a kernel runs on: `f32` values with `f64` arithmetic (`D`), their bits (`U`)
 /// and the bits of the doubles (`Q`). Integer operations wrap, as glibc's unsigned ones.
 pub(crate) trait Half: Copy {
@@ -141,6 +179,8 @@ pub(crate) trait Half: Copy {
     /// `(u as i32) >> s` (arithmetic) as a double.
     fn u_sar_to_d(u: Self::U, s: u32) -> Self::D;
     fn d_bits(d: Self::D) -> Self::Q;
+    /// max(lo, min(d, hi)) for d not NaN.
+    fn d_clamp(d: Self::D, lo: f64, hi: f64) -> Self::D;
     fn d_from_bits(q: Self::Q) -> Self::D;
     /// `T[q % 32] + (q << s)` per lane, wrapping.
     fn q_lookup_add_shl(t: &[u64; 32], q: Self::Q, s: u32) -> Self::Q;
@@ -201,6 +241,10 @@ impl Half for f32 {
     #[inline(always)]
     fn d_from_bits(q: u64) -> f64 {
         f64::from_bits(q)
+    }
+    #[inline(always)]
+    fn d_clamp(d: f64, lo: f64, hi: f64) -> f64 {
+        d.min(hi).max(lo)
     }
     #[inline(always)]
     fn q_lookup_add_shl(t: &[u64; 32], q: u64, s: u32) -> u64 {
@@ -267,6 +311,10 @@ impl Half for f32x8 {
         f64x8::new(q.to_array().map(f64::from_bits))
     }
     #[inline(always)]
+    fn d_clamp(d: f64x8, lo: f64, hi: f64) -> f64x8 {
+        d.min(f64x8::splat(hi)).max(f64x8::splat(lo))
+    }
+    #[inline(always)]
     fn q_lookup_add_shl(t: &[u64; 32], q: u64x8, s: u32) -> u64x8 {
         let i = q.to_array();
         u64x8::new(std::array::from_fn(|k| t[(i[k] % 32) as usize])) + (q << s)
@@ -309,6 +357,93 @@ pub(crate) fn ln_kernel<H: Half>(ix: H::U) -> H {
     let y = H::fma(r, H::d(LOG_A[1]), H::d(LOG_A[2]));
     let y = H::fma(r2, H::d(LOG_A[0]), y);
     H::narrow(H::fma(r2, y, r + y0))
+}
+
+/// `powf`'s main path: x^y for the bits `ix` of a positive normal x (a subnormal's as in
+/// [`ln_kernel`]) and a finite y. Where glibc returns ∞, 0 or the smallest subnormal
+/// (|y log2 x| ≥ 126 past its thresholds) y log2 x is clamped to [−151, 129], where this
+/// path rounds to the same values.
+#[inline(always)]
+pub(crate) fn pow_kernel<H: Half>(ix: H::U, y: H) -> H {
+    // log2 x = log1p(z/c − 1)/ln 2 + log2 c + k, x = 2^k z, z ∈ [OFF, 2·OFF) exact.
+    let tmp = H::u_sub(ix, LOG_OFF);
+    let invc = H::u_lookup(&LOG_INVC, tmp, 23 - 4);
+    let log2c = H::u_lookup(&POW_LOG2C, tmp, 23 - 4);
+    let top = H::u_and(tmp, 0xff80_0000);
+    let k = H::u_sar_to_d(top, 23);
+    let z = H::from_bits(H::u_sub_u(ix, top)).widen();
+    let r = H::fma(z, invc, H::d(-1.0));
+    let y0 = log2c + k;
+    let r2 = r * r;
+    let a = H::fma(r, H::d(POW_A[0]), H::d(POW_A[1]));
+    let p = H::fma(r, H::d(POW_A[2]), H::d(POW_A[3]));
+    let r4 = r2 * r2;
+    let q = H::fma(r, H::d(POW_A[4]), y0);
+    let q = H::fma(r2, p, q);
+    let log2x = H::fma(a, r4, q);
+    let ylogx = H::d_clamp(y.widen() * log2x, -151.0, 129.0);
+    // 2^(y log2 x) = 2^(k/32) · 2^r ≈ s · (C0 r³ + C1 r² + C2 r + 1).
+    let kd = ylogx + H::d(EXP2_SHIFT);
+    let ki = H::d_bits(kd);
+    let kd = kd - H::d(EXP2_SHIFT);
+    let r = ylogx - kd;
+    let s = H::d_from_bits(H::q_lookup_add_shl(&EXP_T, ki, 52 - 5));
+    let z = H::fma(r, H::d(EXP2_C[0]), H::d(EXP2_C[1]));
+    let r2 = r * r;
+    let v = H::fma(r, H::d(EXP2_C[2]), H::d(1.0));
+    let v = H::fma(z, r2, v);
+    H::narrow(v * s)
+}
+
+/// x^y as glibc's `powf` (see the module docs) for x ≥ 0: `kernel` receives x (a subnormal
+/// scaled by 2^23), whether it was scaled, and y. For negative x (and −0) the C library's
+/// sign rules are not copied: NaN for x < 0, +0's values for −0; a signaling NaN counts as
+/// a quiet one (1^y and x^0 are 1, where the C library returns the NaN).
+#[inline(always)]
+pub(crate) fn pow<R: Real>(x: R, y: R, kernel: impl FnOnce(R, R::Mask, R) -> R) -> R {
+    let (zero, one, inf) = (R::zero(), R::one(), R::splat(f32::INFINITY));
+    let subnormal = x.less(R::splat(f32::MIN_POSITIVE)) & x.greater(zero);
+    let finite_y = y.is_finite();
+    let v = kernel(
+        R::select(subnormal, x * R::splat(8_388_608.0), x),
+        subnormal,
+        R::select(finite_y, y, zero),
+    );
+    let y_neg = y.less(zero);
+    // x = 0: 0 for y > 0, ∞ for y < 0; x = ∞ the other way round.
+    let v = R::select(x.equals(zero), R::select(y_neg, inf, zero), v);
+    let v = R::select(x.equals(inf), R::select(y_neg, zero, inf), v);
+    // y = ±∞: 0 or ∞ as x^y tends to.
+    let above_one = x.greater(one);
+    let to_inf = (y_neg & !above_one) | (!y_neg & above_one);
+    let v = R::select(finite_y, v, R::select(to_inf, inf, zero));
+    let nan = !x.equals(x) | !y.equals(y) | x.less(zero);
+    let v = R::select(nan, R::splat(f32::NAN), v);
+    // x^0 = 1 and 1^y = 1, even for NaN.
+    R::select(y.equals(zero) | x.equals(one), one, v)
+}
+
+/// [`pow_kernel`] of one lane.
+#[inline(always)]
+pub(crate) fn pow_kernel_f32(x: f32, scaled: bool, y: f32) -> f32 {
+    pow_kernel::<f32>(
+        x.to_bits().wrapping_sub(if scaled { 23 << 23 } else { 0 }),
+        y,
+    )
+}
+
+/// [`pow_kernel`] of sixteen lanes, as two halves.
+#[inline(always)]
+pub(crate) fn pow_kernel_f32x16(
+    x: wide::f32x16,
+    scaled: wide::f32x16,
+    y: wide::f32x16,
+) -> wide::f32x16 {
+    let half = |v: f32x8, m: f32x8, y: f32x8| {
+        pow_kernel::<f32x8>(v.bits() - (m.bits() & u32x8::splat(23 << 23)), y)
+    };
+    let ([lo, hi], [mlo, mhi], [ylo, yhi]) = (halves(x), halves(scaled), halves(y));
+    join(half(lo, mlo, ylo), half(hi, mhi, yhi))
 }
 
 /// e^x as glibc's `expf` (see the module docs), lanes given by `kernel`.
@@ -449,6 +584,67 @@ mod tests {
         }
     }
 
+    /// x^y against the C library for x ≥ 0: every 9973rd x with y from a grid of
+    /// magnitudes and signs, the special values, and the Phong models' arguments.
+    #[test]
+    #[cfg(all(
+        target_arch = "x86_64",
+        target_os = "linux",
+        target_env = "gnu",
+        target_feature = "fma"
+    ))]
+    fn powf_is_glibc_bit_for_bit_for_positive_x() {
+        let mut ys: Vec<f32> = vec![
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.5,
+            2.0,
+            3.0,
+            1e5,
+            -1e5,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            1e-30,
+            1e30,
+            -1e30,
+            126.0,
+            -149.5,
+        ];
+        let mut s = 0x2545_f491u32;
+        for _ in 0..200 {
+            s ^= s << 13;
+            s ^= s >> 17;
+            s ^= s << 5;
+            let m = s as f32 / u32::MAX as f32;
+            ys.push((m - 0.3) * 10f32.powi((s % 13) as i32 - 6));
+        }
+        // Signaling NaNs (quiet bit clear) are outside the documented domain.
+        let quiet = |x: f32| !x.is_nan() || x.to_bits() & 0x0040_0000 != 0;
+        let xs = floats(9973).filter(|x| !x.is_sign_negative() && quiet(*x));
+        for x in xs.chain([0.0, 1.0, f32::from_bits(1), 0.999_999_9, 1.000_000_1]) {
+            for &y in &ys {
+                if !quiet(y) {
+                    continue;
+                }
+                let (got, want) = (Real::powf(x, y), x.powf(y));
+                assert!(same(got, want), "{x:e}^{y:e} = {got:e}, libm {want:e}");
+            }
+        }
+        // The Phong lobes: cos^n near the lobe's edge, u^(1/(n + 1)).
+        for i in 0..100_000 {
+            let c = 1.0 - i as f32 * 1e-5;
+            let n = 1.5f32.powi(i % 29);
+            assert!(same(Real::powf(c, n), c.powf(n)), "{c}^{n}");
+            assert!(same(
+                Real::powf(c, 1.0 / (n + 1.0)),
+                c.powf(1.0 / (n + 1.0))
+            ));
+        }
+    }
+
     /// All 2^32 arguments (a minute): `cargo test -p radia-math --profile test -- --ignored`.
     #[test]
     #[ignore]
@@ -472,10 +668,14 @@ mod tests {
         for chunk in v.chunks(16) {
             let x = f32x16::from_fn(|k| chunk.get(k).copied().unwrap_or(0.5));
             let (e, l) = (Real::exp(x), Real::ln(x));
+            let y = f32x16::from_fn(|k| x.lane((k + 5) % 16) * 0.37);
+            let p = Real::powf(x, y);
             for k in 0..16 {
                 let xk = x.lane(k);
                 assert!(same(e.lane(k), Real::exp(xk)), "exp({xk:e})");
                 assert!(same(l.lane(k), Real::ln(xk)), "ln({xk:e})");
+                let yk = y.lane(k);
+                assert!(same(p.lane(k), Real::powf(xk, yk)), "{xk:e}^{yk:e}");
             }
         }
     }
