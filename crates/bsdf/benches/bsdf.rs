@@ -19,12 +19,12 @@ use divan::{black_box, Bencher};
 use glam::{Vec2, Vec3};
 use radia_bsdf::ior::lookup_conductor;
 use radia_bsdf::microfacet::Shadowing;
+use radia_bsdf::ShadingPointR;
 use radia_bsdf::{
-    BlinnPhong, Bsdf, Conductor, CookTorrance, CookTorranceFresnel, Diffuse, Dielectric,
+    BlinnPhong, Bsdf, Conductor, CookTorrance, CookTorranceFresnel, Dielectric, Diffuse,
     MicrofacetDistribution, MicrofacetType, Phong, Plastic, RoughConductor, RoughDielectric,
     RoughPlastic, ShadingPoint, ThinDielectric, TwoSided,
 };
-use radia_bsdf::ShadingPointR;
 use radia_math::real::{f32x16, Real, Vector2, Vector3};
 use radia_sampling::warp::square_to_cosine_hemisphere;
 use rand::{Rng, SeedableRng};
