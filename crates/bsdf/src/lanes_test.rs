@@ -111,7 +111,30 @@ fn random_lane_bsdf(rng: &mut Pcg32, depth: u32) -> Bsdf {
     let presets = crate::ior::CONDUCTOR_PRESETS;
     let preset = presets[rng.random_range(0..presets.len())];
     let (int_ior, ext_ior) = random_eta(rng);
-    match rng.random_range(0..7) {
+    let exponent = match rng.random_range(0..4) {
+        0 => 0.0,
+        1 => 1e5,
+        _ => log_uniform(rng, 1e-3, 1e4),
+    };
+    match rng.random_range(0..10) {
+        7 => Bsdf::Phong(Phong::new(color(rng), color(rng), exponent)),
+        8 => Bsdf::BlinnPhong(BlinnPhong::new(color(rng), color(rng), exponent)),
+        9 => {
+            let fresnel = if rng.random() {
+                CookTorranceFresnel::Schlick { f0: color(rng) }
+            } else {
+                CookTorranceFresnel::MetallicRoughness {
+                    base_color: color(rng),
+                    metallic: random_texture(rng, |r| r.random_range(-0.1..1.1)),
+                }
+            };
+            let m = CookTorrance::new(dist, shadowing, fresnel);
+            Bsdf::CookTorrance(if rng.random() {
+                m.with_roughness_texture(random_texture(rng, |r| r.random_range(-0.1..1.1)))
+            } else {
+                m
+            })
+        }
         // Its tables take 10⁶ normals to build: rarer.
         6 if rng.random_range(0..3) == 0 => Bsdf::RoughPlastic(RoughPlastic::new(
             kind,
@@ -318,6 +341,9 @@ fn lanes_are_the_one_path_bit_for_bit() {
         "Plastic",
         "RoughPlastic",
         "TwoSided",
+        "Phong",
+        "BlinnPhong",
+        "CookTorrance",
     ] {
         assert!(kinds.get(kind).copied().unwrap_or(0) >= 10, "{kinds:?}");
     }

@@ -466,6 +466,9 @@ impl Bsdf {
             Bsdf::Plastic(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::RoughPlastic(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::TwoSided(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::Phong(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::BlinnPhong(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::CookTorrance(m) => m.eval_pdf(sp, wi, wo),
             _ => (self.eval(sp, wi, wo), self.pdf(sp, wi, wo)),
         }
     }
@@ -492,6 +495,9 @@ impl Bsdf {
                 | Bsdf::RoughDielectric(_)
                 | Bsdf::Plastic(_)
                 | Bsdf::RoughPlastic(_)
+                | Bsdf::Phong(_)
+                | Bsdf::BlinnPhong(_)
+                | Bsdf::CookTorrance(_)
         )
     }
 
@@ -512,6 +518,9 @@ impl Bsdf {
             Bsdf::RoughDielectric(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::Plastic(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::RoughPlastic(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::Phong(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::BlinnPhong(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::CookTorrance(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::TwoSided(m) => m.eval_pdf_r(sp, wi, wo),
             _ => None,
         }
@@ -535,41 +544,52 @@ impl Bsdf {
             Bsdf::RoughDielectric(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::Plastic(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::RoughPlastic(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::Phong(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::BlinnPhong(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::CookTorrance(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::TwoSided(m) => m.sample_r(sp, wi, u1, u2),
             _ => None,
         }
     }
 }
 
-/// Mean of the three channels: Mitsuba's `Texture::mean()` of an RGB constant, used for lobe
-/// sampling weights.
 /// The sample record of a model that mixes a cosine-sampled diffuse lobe with one glossy
-/// lobe (Phong, Blinn-Phong, Cook-Torrance): `wo` came from the glossy lobe when `glossy`;
-/// `pdf` is the whole mixture's density of `wo` and `value` its `eval`. `None` when the
-/// density is zero or not finite.
-#[inline]
-pub(crate) fn mixture_sample(
-    wo: Vec3,
-    glossy: bool,
-    pdf: f32,
-    value: impl FnOnce() -> Spectrum,
-) -> Option<BsdfSample> {
-    if !(pdf > 0.0) || !pdf.is_finite() {
-        return None;
+/// lobe (Phong, Blinn-Phong, Cook-Torrance) over any [`Real`]: `wo` came from the glossy
+/// lobe in the lanes of `glossy`; `pdf` is the whole mixture's density of `wo` and `value`
+/// its `eval`. Valid where `valid` and the density is positive and finite.
+#[inline(always)]
+pub(crate) fn mixture_sample_r<R: Real>(
+    wo: Vector3<R>,
+    pdf: R,
+    valid: R::Mask,
+    value: impl FnOnce() -> Vector3<R>,
+) -> BsdfSampleR<R> {
+    let valid = valid & pdf.greater(R::zero()) & pdf.is_finite();
+    if !valid.any() {
+        return BsdfSampleR::none();
     }
-    Some(BsdfSample {
+    BsdfSampleR {
         wo,
-        weight: value() / pdf,
+        weight: value().div(pdf),
         pdf,
-        eta: 1.0,
-        lobe: if glossy {
-            LobeFlags::GLOSSY_REFLECTION
-        } else {
-            LobeFlags::DIFFUSE_REFLECTION
-        },
-    })
+        eta: R::one(),
+        valid,
+        delta: R::Mask::splat(false),
+    }
 }
 
+/// The lobe flags of a [`mixture_sample_r`] for one path.
+#[inline(always)]
+pub(crate) fn mixture_lobe(glossy: bool) -> LobeFlags {
+    if glossy {
+        LobeFlags::GLOSSY_REFLECTION
+    } else {
+        LobeFlags::DIFFUSE_REFLECTION
+    }
+}
+
+/// Mean of the three channels: Mitsuba's `Texture::mean()` of an RGB constant, used for lobe
+/// sampling weights.
 #[inline]
 pub(crate) fn mean(c: Spectrum) -> f32 {
     (c.x + c.y + c.z) * (1.0 / 3.0)

@@ -18,7 +18,7 @@
 //! The special cases (infinities, NaN, under- and overflow, subnormal arguments) are
 //! selected over [`Real`] afterwards, as glibc's early returns.
 
-use crate::real::Real;
+use crate::real::{Mask, Real};
 use wide::{f32x8, f64x8, i32x8, u32x8, u64x8};
 
 /// `expf`'s table: the bits of 2^(j/32) less j·2^47 (`__exp2f_data.tab`).
@@ -400,8 +400,13 @@ pub(crate) fn pow_kernel<H: Half>(ix: H::U, y: H) -> H {
 /// sign rules are not copied: NaN for x < 0, +0's values for −0; a signaling NaN counts as
 /// a quiet one (1^y and x^0 are 1, where the C library returns the NaN).
 #[inline(always)]
-pub(crate) fn pow<R: Real>(x: R, y: R, kernel: impl FnOnce(R, R::Mask, R) -> R) -> R {
+pub(crate) fn pow<R: Real>(x: R, y: R, kernel: impl Fn(R, R::Mask, R) -> R) -> R {
     let (zero, one, inf) = (R::zero(), R::one(), R::splat(f32::INFINITY));
+    // Positive normal x other than 1, finite y other than 0: the kernel alone (a branch for
+    // one path, as glibc's).
+    if (normal(x) & !x.equals(one) & y.is_finite() & !y.equals(zero)).all() {
+        return kernel(x, R::Mask::splat(false), y);
+    }
     let subnormal = x.less(R::splat(f32::MIN_POSITIVE)) & x.greater(zero);
     let finite_y = y.is_finite();
     let v = kernel(
@@ -421,6 +426,12 @@ pub(crate) fn pow<R: Real>(x: R, y: R, kernel: impl FnOnce(R, R::Mask, R) -> R) 
     let v = R::select(nan, R::splat(f32::NAN), v);
     // x^0 = 1 and 1^y = 1, even for NaN.
     R::select(y.equals(zero) | x.equals(one), one, v)
+}
+
+/// Positive, normal and finite (not NaN).
+#[inline(always)]
+fn normal<R: Real>(x: R) -> R::Mask {
+    x.greater_eq(R::splat(f32::MIN_POSITIVE)) & x.less_eq(R::splat(f32::MAX))
 }
 
 /// [`pow_kernel`] of one lane.
@@ -448,7 +459,13 @@ pub(crate) fn pow_kernel_f32x16(
 
 /// e^x as glibc's `expf` (see the module docs), lanes given by `kernel`.
 #[inline(always)]
-pub(crate) fn exp<R: Real>(x: R, kernel: impl FnOnce(R) -> R) -> R {
+pub(crate) fn exp<R: Real>(x: R, kernel: impl Fn(R) -> R) -> R {
+    // Arguments of the main path: the kernel alone (a branch for one path, as glibc's).
+    let main = x.greater_eq(R::splat(f32::from_bits(0xc2ce_8ecf)))
+        & x.less_eq(R::splat(f32::from_bits(0x42b1_7217)));
+    if main.all() {
+        return kernel(x);
+    }
     let y = kernel(x);
     // Above ln(2^128): ∞; below ln(2^−150) (and −∞): 0; below ln(2^−149) the smallest
     // subnormal (glibc's __math_may_uflowf); NaN stays NaN.
@@ -469,8 +486,12 @@ pub(crate) fn exp<R: Real>(x: R, kernel: impl FnOnce(R) -> R) -> R {
 /// ln x as glibc's `logf` (see the module docs): the bits of x (and of the subnormals
 /// scaled by 2^23) given to `kernel`, which receives x and whether it was scaled.
 #[inline(always)]
-pub(crate) fn ln<R: Real>(x: R, kernel: impl FnOnce(R, R::Mask) -> R) -> R {
+pub(crate) fn ln<R: Real>(x: R, kernel: impl Fn(R, R::Mask) -> R) -> R {
     let zero = R::zero();
+    // Positive normal x other than 1: the kernel alone (a branch for one path, as glibc's).
+    if (normal(x) & !x.equals(R::one())).all() {
+        return kernel(x, R::Mask::splat(false));
+    }
     let subnormal = x.less(R::splat(f32::MIN_POSITIVE)) & x.greater(zero);
     let y = kernel(
         R::select(subnormal, x * R::splat(8_388_608.0), x),
