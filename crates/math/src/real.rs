@@ -108,6 +108,9 @@ pub trait Real:
     fn exp(self) -> Self;
     /// ln x, as glibc's `logf` computes it ([`crate::special`]).
     fn ln(self) -> Self;
+    /// x^y, as glibc's `powf` computes it ([`crate::special`]): `f32::powf` bit for bit on
+    /// x86-64 glibc with FMA (signaling NaNs aside), without its call.
+    fn powf(self, y: Self) -> Self;
 
     #[inline(always)]
     fn zero() -> Self {
@@ -251,6 +254,10 @@ impl Real for f32 {
     fn ln(self) -> Self {
         crate::special::ln(self, crate::special::ln_kernel_f32)
     }
+    #[inline(always)]
+    fn powf(self, y: Self) -> Self {
+        crate::special::pow(self, y, crate::special::pow_kernel_f32)
+    }
 }
 
 /// The masks of `f32x16` are `f32x16` lanes of all ones or all zeros, as the `wide` crate's
@@ -383,6 +390,10 @@ impl Real for f32x16 {
     #[inline(always)]
     fn ln(self) -> Self {
         crate::special::ln(self, crate::special::ln_kernel_f32x16)
+    }
+    #[inline(always)]
+    fn powf(self, y: Self) -> Self {
+        crate::special::pow(self, y, crate::special::pow_kernel_f32x16)
     }
 }
 
@@ -769,8 +780,14 @@ mod tests {
             );
             type Op = fn(f32x16, f32x16, f32x16) -> f32x16;
             type Sop = fn(f32, f32, f32) -> f32;
-            let ops: [(&str, Op, Sop); 16] = [
+            let ops: [(&str, Op, Sop); 18] = [
                 ("exp", |a, _, _| Real::exp(a), |a, _, _| Real::exp(a)),
+                ("powf", |a, b, _| Real::powf(a, b), |a, b, _| Real::powf(a, b)),
+                (
+                    "powf of |a|",
+                    |a, b, _| Real::powf(a.abs(), b),
+                    |a, b, _| Real::powf(Real::abs(a), b),
+                ),
                 ("ln", |a, _, _| Real::ln(a), |a, _, _| Real::ln(a)),
                 ("sqrt", |a, _, _| Real::sqrt(a), |a, _, _| Real::sqrt(a)),
                 ("abs", |a, _, _| Real::abs(a), |a, _, _| Real::abs(a)),

@@ -1,9 +1,12 @@
-//! e^x and ln x over [`Real`] ([`Real::exp`], [`Real::ln`]), computed as glibc computes
-//! `expf` and `logf` (Szabolcs Nagy's algorithms in `sysdeps/ieee754/flt-32/e_expf.c` and
-//! `e_logf.c`, glibc 2.28 and later, in their FMA builds that x86-64 machines with FMA run):
-//! the argument is widened to `f64`, reduced with a 32- or 16-entry table, and a short
-//! polynomial evaluated with fused multiply-adds, so that the `f32` result is bit for bit
-//! the C library's on those machines (tested below against `f32::exp` and `f32::ln`).
+//! e^x, ln x and x^y over [`Real`] ([`Real::exp`], [`Real::ln`], [`Real::powf`]), computed
+//! as glibc computes `expf`, `logf` and `powf` (Szabolcs Nagy's algorithms in
+//! `sysdeps/ieee754/flt-32/e_expf.c`, `e_logf.c` and `e_powf.c`, glibc 2.28 and later, in
+//! their FMA builds that x86-64 machines with FMA run): the argument is widened to `f64`,
+//! reduced with a 32- or 16-entry table, and a short polynomial evaluated with fused
+//! multiply-adds, so that the `f32` result is bit for bit the C library's on those machines
+//! (tested below against `f32::exp`, `f32::ln` and `f32::powf`). x^y is 2^(y log2 x): log2 x
+//! from a table of 16 subintervals and a degree-5 polynomial, the product in `f64`, then
+//! `expf`'s 2^(k/32) table and a cubic.
 //!
 //! Why these and not a polynomial in `f32`: radia's scalar models called `f32::exp` and
 //! `f32::ln` (and `microfacet::exp_neg` is tested to be `exp` bit for bit), so the one-path
@@ -114,6 +117,63 @@ const LOG_A: [f64; 3] = [
 /// The bits of 0x1.66p-1 ≈ 0.7 (`OFF`): subintervals are counted from it.
 const LOG_OFF: u32 = 0x3f33_0000;
 
+/// `powf`'s log2 table: 1/c and log2 c at the centres c of the same 16 subintervals
+/// (`__powf_log2_data.tab`, unscaled: x86-64 has no `TOINT_INTRINSICS`).
+const POW_INVC: [f64; 16] = [
+    f64::from_bits(0x3ff661ec79f8f3be),
+    f64::from_bits(0x3ff571ed4aaf883d),
+    f64::from_bits(0x3ff49539f0f010b0),
+    f64::from_bits(0x3ff3c995b0b80385),
+    f64::from_bits(0x3ff30d190c8864a5),
+    f64::from_bits(0x3ff25e227b0b8ea0),
+    f64::from_bits(0x3ff1bb4a4a1a343f),
+    f64::from_bits(0x3ff12358f08ae5ba),
+    f64::from_bits(0x3ff0953f419900a7),
+    f64::from_bits(0x3ff0000000000000),
+    f64::from_bits(0x3fee608cfd9a47ac),
+    f64::from_bits(0x3feca4b31f026aa0),
+    f64::from_bits(0x3feb2036576afce6),
+    f64::from_bits(0x3fe9c2d163a1aa2d),
+    f64::from_bits(0x3fe886e6037841ed),
+    f64::from_bits(0x3fe767dcf5534862),
+];
+const POW_LOG2C: [f64; 16] = [
+    f64::from_bits(0xbfdefec65b963019),
+    f64::from_bits(0xbfdb0b6832d4fca4),
+    f64::from_bits(0xbfd7418b0a1fb77b),
+    f64::from_bits(0xbfd39de91a6dcf7b),
+    f64::from_bits(0xbfd01d9bf3f2b631),
+    f64::from_bits(0xbfc97c1d1b3b7af0),
+    f64::from_bits(0xbfc2f9e393af3c9f),
+    f64::from_bits(0xbfb960cbbf788d5c),
+    f64::from_bits(0xbfaa6f9db6475fce),
+    0.0,
+    f64::from_bits(0x3fb338ca9f24f53d),
+    f64::from_bits(0x3fc476a9543891ba),
+    f64::from_bits(0x3fce840b4ac4e4d2),
+    f64::from_bits(0x3fd40645f0c6651c),
+    f64::from_bits(0x3fd88e9c2c1b9ff8),
+    f64::from_bits(0x3fdce0a44eb17bcc),
+];
+/// The polynomial of log2(1 + r) (`__powf_log2_data.poly`).
+const POW_A: [f64; 5] = [
+    f64::from_bits(0x3fd27616c9496e0b),
+    f64::from_bits(0xbfd71969a075c67a),
+    f64::from_bits(0x3fdec70a6ca7badd),
+    f64::from_bits(0xbfe7154748bef6c8),
+    f64::from_bits(0x3ff71547652ab82b),
+];
+/// The polynomial of 2^r − 1 (`__exp2f_data.poly`).
+const EXP2_C: [f64; 3] = [
+    f64::from_bits(0x3fac_6af8_4b91_2394),
+    f64::from_bits(0x3fce_bfce_50fa_c4f3),
+    f64::from_bits(0x3fe6_2e42_ff0c_52d6),
+];
+/// 1.5·2^47: adding it rounds to a multiple of 1/32, left in the low bits (`shift_scaled`).
+const EXP2_SHIFT: f64 = f64::from_bits(0x42e8_0000_0000_0000);
+/// log2 of the rounding boundary above `f32::MAX`: 2^y is infinite beyond it.
+const POW_OVERFLOW: f64 = f64::from_bits(0x405f_ffff_ffd1_d571);
+
 /// The lanes a kernel runs on: `f32` values with `f64` arithmetic (`D`), their bits (`U`)
 /// and the bits of the doubles (`Q`). Integer operations wrap, as glibc's unsigned ones.
 pub(crate) trait Half: Copy {
@@ -144,6 +204,8 @@ pub(crate) trait Half: Copy {
     fn d_from_bits(q: Self::Q) -> Self::D;
     /// `T[q % 32] + (q << s)` per lane, wrapping.
     fn q_lookup_add_shl(t: &[u64; 32], q: Self::Q, s: u32) -> Self::Q;
+    /// Per lane `below` where d ≤ `lo`, `above` where d > `hi`, else `x`.
+    fn saturate(d: Self::D, lo: f64, below: f32, hi: f64, above: f32, x: Self) -> Self;
 }
 
 impl Half for f32 {
@@ -205,6 +267,16 @@ impl Half for f32 {
     #[inline(always)]
     fn q_lookup_add_shl(t: &[u64; 32], q: u64, s: u32) -> u64 {
         t[(q % 32) as usize].wrapping_add(q << s)
+    }
+    #[inline(always)]
+    fn saturate(d: f64, lo: f64, below: f32, hi: f64, above: f32, x: f32) -> f32 {
+        if d <= lo {
+            below
+        } else if d > hi {
+            above
+        } else {
+            x
+        }
     }
 }
 
@@ -271,6 +343,13 @@ impl Half for f32x8 {
         let i = q.to_array();
         u64x8::new(std::array::from_fn(|k| t[(i[k] % 32) as usize])) + (q << s)
     }
+    #[inline(always)]
+    fn saturate(d: f64x8, lo: f64, below: f32, hi: f64, above: f32, x: f32x8) -> f32x8 {
+        let (d, x) = (d.to_array(), x.to_array());
+        f32x8::new(std::array::from_fn(|k| {
+            <f32 as Half>::saturate(d[k], lo, below, hi, above, x[k])
+        }))
+    }
 }
 
 /// `expf`'s main path (any finite x in [−103.97, 88.72]; other lanes give meaningless
@@ -309,6 +388,111 @@ pub(crate) fn ln_kernel<H: Half>(ix: H::U) -> H {
     let y = H::fma(r, H::d(LOG_A[1]), H::d(LOG_A[2]));
     let y = H::fma(r2, H::d(LOG_A[0]), y);
     H::narrow(H::fma(r2, y, r + y0))
+}
+
+/// `powf`'s main path: x^y for the bits `ix` of a positive normal x (a subnormal's bits
+/// are those of x·2^23 less 23·2^23) and a finite y; 0 and ∞ where 2^(y log2 x) under- or
+/// overflows.
+#[inline(always)]
+pub(crate) fn pow_kernel<H: Half>(ix: H::U, y: H) -> H {
+    // log2 x = log2(1 + (z/c − 1)) + log2 c + k, with x = 2^k z as for ln.
+    let tmp = H::u_sub(ix, LOG_OFF);
+    let invc = H::u_lookup(&POW_INVC, tmp, 23 - 4);
+    let logc = H::u_lookup(&POW_LOG2C, tmp, 23 - 4);
+    let k = H::u_sar_to_d(tmp, 23);
+    let z = H::from_bits(H::u_sub_u(ix, H::u_and(tmp, 0xff80_0000))).widen();
+    let r = H::fma(z, invc, H::d(-1.0));
+    let y0 = logc + k;
+    let r2 = r * r;
+    let p = H::fma(H::d(POW_A[0]), r, H::d(POW_A[1]));
+    let q = H::fma(H::d(POW_A[2]), r, H::d(POW_A[3]));
+    let r4 = r2 * r2;
+    let t = H::fma(H::d(POW_A[4]), r, y0);
+    let t = H::fma(q, r2, t);
+    let log2x = H::fma(p, r4, t);
+    let ylogx = y.widen() * log2x;
+    // 2^ylogx = 2^(k/32) · 2^r, r ∈ [−1/64, 1/64]: s · (C0 r³ + C1 r² + C2 r + 1).
+    let kd = ylogx + H::d(EXP2_SHIFT);
+    let ki = H::d_bits(kd);
+    let kd = kd - H::d(EXP2_SHIFT);
+    let r = ylogx - kd;
+    let s = H::d_from_bits(H::q_lookup_add_shl(&EXP_T, ki, 52 - 5));
+    let z = H::fma(H::d(EXP2_C[0]), r, H::d(EXP2_C[1]));
+    let r2 = r * r;
+    let e = H::fma(H::d(EXP2_C[2]), r, H::d(1.0));
+    let e = H::fma(z, r2, e);
+    // glibc's __math_uflowf and __math_oflowf (also for |ylogx| beyond the table's reach).
+    H::saturate(
+        ylogx,
+        -150.0,
+        0.0,
+        POW_OVERFLOW,
+        f32::INFINITY,
+        H::narrow(e * s),
+    )
+}
+
+/// x^y as glibc's `powf` (see the module docs), lanes given by `kernel`, which receives |x|
+/// (scaled by 2^23 where it is subnormal), whether it was scaled, and y. Signaling NaNs
+/// count as quiet ones (glibc's x^0 and 1^y of one are NaN, here 1).
+#[inline(always)]
+pub(crate) fn pow<R: Real>(x: R, y: R, kernel: impl FnOnce(R, R::Mask, R) -> R) -> R {
+    let (zero, one, inf) = (R::zero(), R::one(), R::splat(f32::INFINITY));
+    let ax = x.abs();
+    let subnormal = ax.less(R::splat(f32::MIN_POSITIVE)) & ax.greater(zero);
+    let v = kernel(
+        R::select(subnormal, ax * R::splat(8_388_608.0), ax),
+        subnormal,
+        y,
+    );
+    // glibc's checkint (for a finite y): an integer, and an odd one.
+    let y_int = y.floor().equals(y);
+    let half = y * R::splat(0.5);
+    let y_odd = y_int & !half.floor().equals(half);
+    let x_neg = x.is_sign_negative();
+    // A finite x < 0: NaN (__math_invalidf) unless y is an integer, negative for odd y.
+    let v = R::select(
+        x_neg & !y_int,
+        R::splat(f32::NAN),
+        v.negate_where(x_neg & y_odd),
+    );
+    // x = ±0 or ±∞: x² (with the sign of x for odd y), or its reciprocal for y < 0.
+    let x2 = (x * x).negate_where(x_neg & y_odd);
+    let x2 = R::select(y.is_sign_negative(), one / x2, x2);
+    let v = R::select(ax.equals(zero) | ax.equals(inf), x2, v);
+    // y = ±∞: 1 for |x| = 1; 0 for |x| < 1 with y = +∞ and for |x| > 1 with y = −∞; +∞.
+    let small = ax.less(one);
+    let y_neg = y.is_sign_negative();
+    let v_inf = R::select((small & !y_neg) | (!small & y_neg), zero, y * y);
+    let v_inf = R::select(ax.equals(one), one, v_inf);
+    let v = R::select(y.abs().equals(inf), v_inf, v);
+    // NaN in, NaN out; but 1^y = 1 and x^0 = 1 whatever the other operand.
+    let v = R::select(x.equals(x) & y.equals(y), v, x + y);
+    let v = R::select(x.equals(one), one, v);
+    R::select(y.equals(zero), one, v)
+}
+
+/// [`pow_kernel`] of one lane.
+#[inline(always)]
+pub(crate) fn pow_kernel_f32(ax: f32, scaled: bool, y: f32) -> f32 {
+    pow_kernel::<f32>(
+        ax.to_bits().wrapping_sub(if scaled { 23 << 23 } else { 0 }),
+        y,
+    )
+}
+
+/// [`pow_kernel`] of sixteen lanes, as two halves.
+#[inline(always)]
+pub(crate) fn pow_kernel_f32x16(
+    ax: wide::f32x16,
+    scaled: wide::f32x16,
+    y: wide::f32x16,
+) -> wide::f32x16 {
+    let half = |v: f32x8, m: f32x8, y: f32x8| {
+        pow_kernel::<f32x8>(v.bits() - (m.bits() & u32x8::splat(23 << 23)), y)
+    };
+    let ([lo, hi], [mlo, mhi], [ylo, yhi]) = (halves(ax), halves(scaled), halves(y));
+    join(half(lo, mlo, ylo), half(hi, mhi, yhi))
 }
 
 /// e^x as glibc's `expf` (see the module docs), lanes given by `kernel`.
@@ -449,6 +633,113 @@ mod tests {
         }
     }
 
+    /// Signaling NaNs, which glibc's `powf` tells from quiet ones (module docs of `pow`).
+    fn signaling(x: f32) -> bool {
+        x.is_nan() && x.to_bits() & 0x0040_0000 == 0
+    }
+
+    /// Exponents: the special values, small integers (odd and even, for negative bases),
+    /// halves, the ones the models raise to (Phong's up to 10⁵, GTR1's in [0, 1]), and
+    /// every `step`-th float.
+    fn exponents(step: u32) -> Vec<f32> {
+        let mut y = vec![
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.5,
+            -0.5,
+            2.0,
+            -2.0,
+            3.0,
+            -3.0,
+            1e5,
+            16_777_215.0,
+            16_777_216.0,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            f32::MAX,
+            f32::from_bits(1),
+            0.999_999_94,
+            1.000_000_1,
+        ];
+        y.extend(floats(step).filter(|v| !signaling(*v)));
+        y
+    }
+
+    /// Every `x_step`-th float to the power of [`exponents`]`(y_step)`, against libm.
+    fn powf_grid(x_step: u32, y_step: u32) {
+        let ys = exponents(y_step);
+        for x in floats(x_step).filter(|v| !signaling(*v)) {
+            for &y in &ys {
+                let p = Real::powf(x, y);
+                assert!(
+                    same(p, x.powf(y)),
+                    "{x:e}^{y:e} = {p:e}, libm {:e}",
+                    x.powf(y)
+                );
+            }
+        }
+    }
+
+    /// The C library's `powf` (x86-64 glibc with FMA): the one path's x^y is its bits, for
+    /// bases all over the floats against exponents of every kind, bases and exponents of the
+    /// models, and where 2^(y log2 x) under- and overflows.
+    #[test]
+    #[cfg(all(
+        target_arch = "x86_64",
+        target_os = "linux",
+        target_env = "gnu",
+        target_feature = "fma"
+    ))]
+    fn scalar_powf_is_glibc_bit_for_bit() {
+        let check = |x: f32, y: f32| {
+            let p = Real::powf(x, y);
+            assert!(
+                same(p, x.powf(y)),
+                "{x:e}^{y:e} = {p:e}, libm {:e}",
+                x.powf(y)
+            );
+        };
+        powf_grid(999_983, 429_497);
+        // Every x near 1 (where log2 x is smallest) against a few exponents.
+        let mut x = 0.999f32;
+        while x < 1.001 {
+            for y in [0.3, -7.5, 1e5, 3e7] {
+                check(x, y);
+            }
+            x = x.next_up();
+        }
+        // The models' ranges: cosines to large exponents, α² to exponents in [0, 1].
+        let mut rng = 0x2545_f491u32;
+        let mut next = || {
+            rng ^= rng << 13;
+            rng ^= rng >> 17;
+            rng ^= rng << 5;
+            rng as f32 / u32::MAX as f32
+        };
+        for _ in 0..1_000_000 {
+            check(next(), 1e5 * next() * next());
+            check(1e-6 + 0.01 * next() * next(), next());
+        }
+        // Around overflow (2^128) and underflow (2^−150), every float.
+        for (x, lo, hi) in [
+            (2.0f32, 127.99, 128.01),
+            (0.5, 149.99, 150.01),
+            (2.0, -150.01, -149.99),
+            (1.5, 218.8, 218.9),
+            (1.5, -256.6, -256.3),
+        ] {
+            let mut y = lo;
+            while y < hi {
+                check(x, y);
+                check(-x, y);
+                y = y.next_up();
+            }
+        }
+    }
+
     /// All 2^32 arguments (a minute): `cargo test -p radia-math --profile test -- --ignored`.
     #[test]
     #[ignore]
@@ -463,6 +754,8 @@ mod tests {
             assert!(same(Real::exp(x), x.exp()), "exp({x:e})");
             assert!(same(Real::ln(x), x.ln()), "ln({x:e})");
         }
+        // 7·10⁹ pairs (five minutes).
+        powf_grid(65_537, 40_009);
     }
 
     /// Sixteen lanes give each lane's one-path value.
@@ -476,6 +769,20 @@ mod tests {
                 let xk = x.lane(k);
                 assert!(same(e.lane(k), Real::exp(xk)), "exp({xk:e})");
                 assert!(same(l.lane(k), Real::ln(xk)), "ln({xk:e})");
+            }
+        }
+        let ys = exponents(400_009);
+        for (i, chunk) in v.chunks(16).step_by(7).enumerate() {
+            let x = f32x16::from_fn(|k| chunk.get(k).copied().unwrap_or(0.5));
+            let y = f32x16::from_fn(|k| ys[(i * 16 + k * 5) % ys.len()]);
+            let (p, pa) = (Real::powf(x, y), Real::powf(x.abs(), y));
+            for k in 0..16 {
+                let (xk, yk) = (x.lane(k), y.lane(k));
+                assert!(same(p.lane(k), Real::powf(xk, yk)), "{xk:e}^{yk:e}");
+                assert!(
+                    same(pa.lane(k), Real::powf(Real::abs(xk), yk)),
+                    "|{xk:e}|^{yk:e}"
+                );
             }
         }
     }
@@ -497,6 +804,20 @@ mod tests {
             }
         }
         assert!(e_worst < 0.51 && l_worst < 0.83, "{e_worst} {l_worst}");
+        // glibc's bound for powf is 0.82 ulp.
+        let mut p_worst: f64 = 0.0;
+        for x in floats(99_991) {
+            for y in [0.3f32, 2.5, -1.7, 31.0, 1e3] {
+                let want = (x as f64).powf(y as f64);
+                if x.is_finite() && x > 0.0 && want > 1e-37 && want < 1e38 {
+                    p_worst = p_worst.max(ulps(Real::powf(x, y), want));
+                }
+            }
+        }
+        assert!(p_worst < 0.83, "powf: {p_worst} ulps");
+        assert_eq!(Real::powf(-2.0f32, 3.0), -8.0);
+        assert!(Real::powf(-2.0f32, 0.5).is_nan());
+        assert_eq!(Real::powf(0.0f32, -1.0), f32::INFINITY);
         assert!(Real::ln(-1.0f32).is_nan() && Real::exp(f32::NAN).is_nan());
         assert_eq!(Real::ln(0.0f32), f32::NEG_INFINITY);
         assert_eq!(Real::exp(f32::NEG_INFINITY), 0.0);
