@@ -85,6 +85,8 @@ mod twosided;
 #[cfg(test)]
 mod lanes_test;
 #[cfg(test)]
+mod lanes_test_principled;
+#[cfg(test)]
 mod testing;
 
 pub use blend::Blend;
@@ -447,6 +449,7 @@ impl Bsdf {
             Bsdf::Conductor(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::Dielectric(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::ThinDielectric(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::PrincipledThin(m) => m.eval_pdf(sp, wi, wo),
             _ => (self.eval(sp, wi, wo), self.pdf(sp, wi, wo)),
         }
     }
@@ -467,6 +470,8 @@ impl Bsdf {
                 | Bsdf::RoughConductor(_)
                 | Bsdf::Dielectric(_)
                 | Bsdf::ThinDielectric(_)
+                | Bsdf::Principled(_)
+                | Bsdf::PrincipledThin(_)
         )
     }
 
@@ -484,6 +489,8 @@ impl Bsdf {
             Bsdf::RoughConductor(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::Dielectric(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::ThinDielectric(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::Principled(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::PrincipledThin(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             _ => None,
         }
     }
@@ -503,6 +510,8 @@ impl Bsdf {
             Bsdf::RoughConductor(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::Dielectric(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::ThinDielectric(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::Principled(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::PrincipledThin(m) => Some(m.sample_r(sp, wi, u1, u2)),
             _ => None,
         }
     }
