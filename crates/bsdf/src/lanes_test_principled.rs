@@ -102,11 +102,35 @@ pub(crate) fn random_principled_thin(rng: &mut Pcg32) -> Bsdf {
     Bsdf::PrincipledThin(m)
 }
 
-/// One of the models this file tests, with random parameters.
-fn random_model(rng: &mut Pcg32) -> Bsdf {
-    match rng.random_range(0..2) {
+/// One of the models this file tests, with random parameters; those that nest others
+/// (when `depth` > 0) nest any lane models.
+fn random_model(rng: &mut Pcg32, depth: u32) -> Bsdf {
+    let kinds = if depth > 0 { 3 } else { 2 };
+    match rng.random_range(0..kinds) {
         0 => random_principled(rng),
-        _ => random_principled_thin(rng),
+        1 => random_principled_thin(rng),
+        _ => {
+            let (first, second) = (random_nested(rng, depth - 1), random_nested(rng, depth - 1));
+            Bsdf::Blend(if rng.random() {
+                Blend::new(random_weight(rng), first, second)
+            } else {
+                Blend::textured(random_texture(rng, random_weight), first, second)
+            })
+        }
+    }
+}
+
+/// Any model with lane versions: `lanes_test.rs`'s or this file's.
+fn random_nested(rng: &mut Pcg32, depth: u32) -> Bsdf {
+    loop {
+        let b = if rng.random() {
+            random_lane_bsdf(rng)
+        } else {
+            random_model(rng, depth)
+        };
+        if b.has_r() {
+            return b;
+        }
     }
 }
 
@@ -277,11 +301,11 @@ fn compare(b: &Bsdf, rng: &mut Pcg32, counts: &mut Counts) {
 }
 
 #[test]
-fn principled_lanes_are_the_one_path_bit_for_bit() {
+fn nested_and_principled_lanes_are_the_one_path_bit_for_bit() {
     let mut rng = Pcg32::seed_from_u64(0x9121_c1b1);
     let mut counts = Counts::default();
     for _ in 0..1500 {
-        let b = random_model(&mut rng);
+        let b = random_model(&mut rng, 2);
         assert!(b.has_r(), "{b:?}");
         for _ in 0..8 {
             compare(&b, &mut rng, &mut counts);
