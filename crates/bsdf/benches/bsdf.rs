@@ -2,9 +2,10 @@
 //! `Bsdf` enum (the dispatch the integrator pays), over fixed seeded inputs.
 //!
 //! Each model gets N = 4096 inputs (wi, u1, u2, wo), built once from a fixed seed: wi and
-//! wo cosine-distributed about +z (for the dielectrics and the two-sided model, half of each
-//! below the surface, so both sides and both lobes are exercised). `wo` is independent of `wi`,
-//! as for a light sample in next-event estimation. Every iteration makes N calls; divan's
+//! wo cosine-distributed about +z (for the dielectrics, the two-sided model, the transmissive
+//! principled models and null, half of each below the surface, so both sides and both lobes
+//! are exercised). `wo` is independent of `wi`, as for a light sample in next-event
+//! estimation. Every iteration makes N calls; divan's
 //! item counter reads as calls per second (Mitem/s = M calls/s).
 //!
 //! `eval_pdf_lanes` and `sample_lanes` make the same N calls sixteen lanes at a time through
@@ -21,9 +22,11 @@ use radia_bsdf::ior::lookup_conductor;
 use radia_bsdf::microfacet::Shadowing;
 use radia_bsdf::ShadingPointR;
 use radia_bsdf::{
-    BlinnPhong, Bsdf, Conductor, CookTorrance, CookTorranceFresnel, Dielectric, Diffuse,
-    MicrofacetDistribution, MicrofacetType, Phong, Plastic, RoughConductor, RoughDielectric,
-    RoughPlastic, ShadingPoint, ThinDielectric, TwoSided,
+    Bitmap, BlinnPhong, Blend, Bsdf, BumpMap, Conductor, CookTorrance, CookTorranceFresnel,
+    Diffuse, Dielectric, FilterType, Mask, MicrofacetDistribution, MicrofacetType, NormalMap,
+    Null, PerturbOptions, Phong, Plastic, Principled, PrincipledIor, PrincipledThin,
+    RoughConductor, RoughDielectric, RoughPlastic, ShadingPoint, Texture, ThinDielectric,
+    TwoSided, UvTransform, WrapMode,
 };
 use radia_math::real::{f32x16, Real, Vector2, Vector3};
 use radia_sampling::warp::square_to_cosine_hemisphere;
@@ -53,6 +56,14 @@ const MODELS: &[&str] = &[
     "phong",
     "blinnphong",
     "cooktorrance_gltf",
+    "principled",
+    "principled_dielectric",
+    "principledthin",
+    "blend_diffuse_roughconductor",
+    "normalmap_roughconductor",
+    "bumpmap_diffuse",
+    "mask_diffuse",
+    "null",
 ];
 
 struct Input {
@@ -67,6 +78,9 @@ struct Case {
     inputs: Vec<Input>,
     /// The inputs by sixteen, in lanes.
     lanes: Vec<LaneInput>,
+    /// Where the model is queried: uv 0 with the shading frame's tangents and normal (what
+    /// a bump map reads).
+    sp: ShadingPoint,
 }
 
 struct LaneInput {
@@ -168,6 +182,88 @@ fn model(name: &str) -> (Bsdf, bool) {
             )),
             false,
         ),
+        "principled" => {
+            // Every lobe on (the "everything" corner of the principled tests).
+            let mut m = Principled::new(Vec3::new(0.8, 0.5, 0.2));
+            m.metallic = Some(0.3.into());
+            m.spec_trans = Some(0.5.into());
+            m.spec_tint = Some(0.5.into());
+            m.sheen = Some(1.0.into());
+            m.sheen_tint = Some(0.5.into());
+            m.flatness = Some(0.5.into());
+            m.clearcoat = Some(1.0.into());
+            m.clearcoat_gloss = 0.5.into();
+            (
+                Bsdf::Principled(m.with_ior(PrincipledIor::Specular(0.5))),
+                true,
+            )
+        }
+        // Blender's default Principled BSDF: the diffuse and specular lobes only.
+        "principled_dielectric" => (
+            Bsdf::Principled(Principled::new(Vec3::new(0.8, 0.5, 0.2))),
+            false,
+        ),
+        "principledthin" => {
+            // The "leaf" corner of the principledthin tests.
+            let mut m = PrincipledThin::new(Vec3::new(0.3, 0.6, 0.2));
+            m.roughness = 0.4.into();
+            m.spec_trans = Some(0.4.into());
+            m.diff_trans = Some(0.8.into());
+            m.eta = 1.4.into();
+            m.spec_tint = Some(0.3.into());
+            m.sheen = Some(0.5.into());
+            m.sheen_tint = Some(0.5.into());
+            m.flatness = Some(0.3.into());
+            (Bsdf::PrincipledThin(m), true)
+        }
+        "blend_diffuse_roughconductor" => (
+            Bsdf::Blend(Blend::new(
+                0.3,
+                Bsdf::Diffuse(Diffuse::new(Vec3::splat(0.5))),
+                Bsdf::RoughConductor(RoughConductor::new(ggx(0.2), eta, k, Vec3::ONE)),
+            )),
+            false,
+        ),
+        "normalmap_roughconductor" => {
+            let n = Vec3::new(0.3, -0.35, 0.9).normalize();
+            (
+                Bsdf::NormalMap(NormalMap::new(
+                    Texture::Constant((n + Vec3::ONE) * 0.5),
+                    Bsdf::RoughConductor(RoughConductor::new(ggx(0.2), eta, k, Vec3::ONE)),
+                    PerturbOptions::default(),
+                )),
+                false,
+            )
+        }
+        "bumpmap_diffuse" => {
+            let height = Bitmap::new(
+                2,
+                2,
+                1,
+                vec![0.0, 0.4, 0.2, 1.0],
+                FilterType::Bilinear,
+                WrapMode::Repeat,
+                UvTransform::IDENTITY,
+            )
+            .expect("valid bitmap");
+            (
+                Bsdf::BumpMap(BumpMap::new(
+                    height.into(),
+                    0.5,
+                    Bsdf::Diffuse(Diffuse::new(Vec3::splat(0.5))),
+                    PerturbOptions::default(),
+                )),
+                false,
+            )
+        }
+        "mask_diffuse" => (
+            Bsdf::Mask(Mask::new(
+                0.7.into(),
+                Bsdf::Diffuse(Diffuse::new(Vec3::splat(0.5))),
+            )),
+            false,
+        ),
+        "null" => (Bsdf::Null(Null), true),
         _ => unreachable!("unknown model {name}"),
     }
 }
@@ -204,12 +300,14 @@ static CASES: LazyLock<Vec<(&'static str, Case)>> = LazyLock::new(|| {
                     wo: Vector3::from_fn(|k| c[k].wo),
                 })
                 .collect();
+            let sp = ShadingPoint::at_uv(Vec2::ZERO);
             (
                 name,
                 Case {
                     bsdf,
                     inputs,
                     lanes,
+                    sp,
                 },
             )
         })
@@ -222,11 +320,10 @@ fn case(name: &str) -> &'static Case {
 
 fn run<O>(bencher: Bencher, name: &str, f: impl Fn(&Bsdf, &ShadingPoint, &Input) -> O + Sync) {
     let c = case(name);
-    let sp = ShadingPoint::default();
     bencher.counter(ItemsCount::new(N)).bench(|| {
         let bsdf = black_box(&c.bsdf);
         for input in black_box(&c.inputs[..]) {
-            black_box(f(bsdf, &sp, input));
+            black_box(f(bsdf, &c.sp, input));
         }
     });
 }

@@ -18,9 +18,17 @@
 //! direction has measure zero). radia returns the delta sample's own weight and the
 //! probability of choosing it, (1 − w) or w times its pdf: unbiased. Blends of smooth
 //! models behave exactly as Mitsuba's.
+//!
+//! Written once over [`Real`] (`eval_pdf_r`, `sample_r`), the nested models queried through
+//! `nested.rs`'s [`Nested`]: for one path their one-path functions (any model), for lanes
+//! their lane versions, so a blend has lanes where both its models have. A lane's weight
+//! comes from the texture at its point, and each nested model is queried only if some lane
+//! needs it.
 
-use crate::{Bsdf, BsdfSample, LobeFlags, ShadingPoint, Texture};
+use crate::nested::{Lanes, Nested, OnePath, Want};
+use crate::{Bsdf, BsdfSample, BsdfSampleR, LobeFlags, ShadingPoint, ShadingPointR, Texture};
 use glam::{Vec2, Vec3};
+use radia_math::real::{select_lazy, Mask, Real, Vector2, Vector3};
 use radia_math::Spectrum;
 
 #[derive(Clone, Debug)]
@@ -61,15 +69,17 @@ impl Blend {
     /// The weight at `sp`.
     #[inline]
     pub(crate) fn weight_at(&self, sp: &ShadingPoint) -> f32 {
+        self.weight_r(&sp.into())
+    }
+
+    /// The weight at `sp` over any [`Real`]: NaN is 0, the rest clamped to [0, 1].
+    #[inline(always)]
+    fn weight_r<R: Real>(&self, sp: &ShadingPointR<R>) -> R {
         match &self.weight_texture {
-            None => self.weight,
+            None => R::splat(self.weight),
             Some(t) => {
-                let w = t.eval_1(sp);
-                if w.is_nan() {
-                    0.0
-                } else {
-                    w.clamp(0.0, 1.0)
-                }
+                let w = t.eval_1_r(sp);
+                R::select(w.equals(w), w.clamp(R::zero(), R::one()), R::zero())
             }
         }
     }
@@ -80,59 +90,139 @@ impl Blend {
 
     #[inline]
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
-        let w = self.weight_at(sp);
-        let mut f = Spectrum::ZERO;
-        if w < 1.0 {
-            f += self.bsdfs[0].eval(sp, wi, wo) * (1.0 - w);
-        }
-        if w > 0.0 {
-            f += self.bsdfs[1].eval(sp, wi, wo) * w;
-        }
-        f
+        let n = OnePath::new(Want::Eval);
+        self.eval_pdf_with(&n, &sp.into(), wi.into(), wo.into())
+            .0
+            .into()
     }
 
     #[inline]
     pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        let w = self.weight_at(sp);
-        let mut p = 0.0;
-        if w < 1.0 {
-            p += self.bsdfs[0].pdf(sp, wi, wo) * (1.0 - w);
-        }
-        if w > 0.0 {
-            p += self.bsdfs[1].pdf(sp, wi, wo) * w;
-        }
-        p
+        let n = OnePath::new(Want::Pdf);
+        self.eval_pdf_with(&n, &sp.into(), wi.into(), wo.into()).1
+    }
+
+    /// [`Blend::eval`] and [`Blend::pdf`] at once (each nested model's `eval_pdf`).
+    #[inline]
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let n = OnePath::new(Want::Both);
+        let (f, pdf) = self.eval_pdf_with(&n, &sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
     }
 
     #[inline]
     pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
-        let w = self.weight_at(sp);
-        // Mitsuba: the second BSDF when u1 ≤ w, the first when u1 > w.
-        let (chosen, other, u1, p_chosen) = if w >= 1.0 || (w > 0.0 && u1 <= w) {
-            (1, 0, (u1 / w).min(1.0), w)
-        } else {
-            (0, 1, ((u1 - w) / (1.0 - w)).clamp(0.0, 1.0), 1.0 - w)
-        };
-        let mut s = self.bsdfs[chosen].sample(sp, wi, u1, u2)?;
-        if s.lobe.is_delta() {
-            // The delta lobe's contribution (1 − w or w times its own) over the probability
-            // of this path through both choices: its own weight.
-            s.pdf *= p_chosen;
-            return Some(s);
+        let n = OnePath::new(Want::Both);
+        let s = self.sample_with(&n, &sp.into(), wi.into(), u1, u2.into());
+        s.one_path(n.lobe())
+    }
+
+    /// eval and pdf over any [`Real`], where both nested models have lane versions.
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        self.eval_pdf_with(&Lanes, sp, wi, wo)
+    }
+
+    /// sample over any [`Real`], where both nested models have lane versions.
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        self.sample_with(&Lanes, sp, wi, u1, u2)
+    }
+
+    /// (1 − w) (f₀, pdf₀) + w (f₁, pdf₁), each term only where its weight is positive (and
+    /// its model queried only if some lane needs it).
+    #[inline(always)]
+    fn eval_pdf_with<R: Real, N: Nested<R>>(
+        &self,
+        n: &N,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        let (zero, one) = (R::zero(), R::one());
+        let w = self.weight_r(sp);
+        let (mut f, mut pdf) = (Vector3::zero(), zero);
+        let first = w.less(one);
+        if first.any() {
+            let (f0, pdf0) = n.eval_pdf(&self.bsdfs[0], sp, wi, wo);
+            let c = one - w;
+            f = Vector3::select(first, f + f0 * c, f);
+            pdf = R::select(first, pdf + pdf0 * c, pdf);
         }
-        let (f_other, pdf_other) = if p_chosen < 1.0 {
-            self.bsdfs[other].eval_pdf(sp, wi, s.wo)
+        let second = w.greater(zero);
+        if second.any() {
+            let (f1, pdf1) = n.eval_pdf(&self.bsdfs[1], sp, wi, wo);
+            f = Vector3::select(second, f + f1 * w, f);
+            pdf = R::select(second, pdf + pdf1 * w, pdf);
+        }
+        (f, pdf)
+    }
+
+    /// The chosen model's sample, combined with the other's eval and pdf where it is smooth.
+    #[inline(always)]
+    fn sample_with<R: Real, N: Nested<R>>(
+        &self,
+        n: &N,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        let (zero, one) = (R::zero(), R::one());
+        let w = self.weight_r(sp);
+        // Mitsuba: the second BSDF when u1 ≤ w, the first when u1 > w; u1 rescaled.
+        let second = w.greater_eq(one) | (w.greater(zero) & u1.less_eq(w));
+        let p_chosen = R::select(second, w, one - w);
+        let u1 = R::select(second, u1, u1 - w) / p_chosen;
+        let u1 = R::select(second, u1.min(one), u1.clamp(zero, one));
+        let (b0, b1) = (&self.bsdfs[0], &self.bsdfs[1]);
+        let s = select_lazy(
+            second,
+            || n.sample(b1, sp, wi, u1, u2),
+            || n.sample(b0, sp, wi, u1, u2),
+        );
+        // A delta sample: its contribution (1 − w or w times its own) over the probability
+        // of this path through both choices is its own weight.
+        let delta_pdf = s.pdf * p_chosen;
+        // A smooth one: the mixture's eval over its pdf at the sampled direction.
+        let smooth = s.valid & !s.delta;
+        let has_other = p_chosen.less(one);
+        let (f_other, pdf_other) = if (smooth & has_other).any() {
+            let (f, pdf) = select_lazy(
+                second,
+                || n.eval_pdf(b0, sp, wi, s.wo),
+                || n.eval_pdf(b1, sp, wi, s.wo),
+            );
+            (
+                Vector3::select(has_other, f, Vector3::zero()),
+                R::select(has_other, pdf, zero),
+            )
         } else {
-            (Spectrum::ZERO, 0.0)
+            (Vector3::zero(), zero)
         };
-        let p_other = 1.0 - p_chosen;
+        let p_other = one - p_chosen;
         let pdf = p_chosen * s.pdf + p_other * pdf_other;
-        if !(pdf > 0.0) || !pdf.is_finite() {
-            return None;
+        let weight = (s.weight * (s.pdf * p_chosen) + f_other * p_other).div(pdf);
+        let smooth_ok = pdf.greater(zero) & pdf.is_finite() & weight.is_finite();
+        BsdfSampleR {
+            wo: s.wo,
+            weight: Vector3::select(s.delta, s.weight, weight),
+            pdf: R::select(s.delta, delta_pdf, pdf),
+            eta: s.eta,
+            valid: s.valid & (s.delta | smooth_ok),
+            delta: s.delta,
         }
-        s.weight = (s.weight * (s.pdf * p_chosen) + f_other * p_other) / pdf;
-        s.pdf = pdf;
-        s.weight.is_finite().then_some(s)
     }
 }
 

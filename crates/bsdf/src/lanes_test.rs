@@ -12,7 +12,7 @@ use rand_pcg::Pcg32;
 
 /// A texture: a constant, a 2×2 bitmap (one or three channels) or a checkerboard, with
 /// values from `value`.
-fn random_texture(rng: &mut Pcg32, mut value: impl FnMut(&mut Pcg32) -> f32) -> Texture {
+pub(crate) fn random_texture(rng: &mut Pcg32, mut value: impl FnMut(&mut Pcg32) -> f32) -> Texture {
     match rng.random_range(0..4) {
         0 => Texture::from(value(rng)),
         1 => {
@@ -40,7 +40,7 @@ fn random_texture(rng: &mut Pcg32, mut value: impl FnMut(&mut Pcg32) -> f32) -> 
 }
 
 /// α from its extremes: the clamp 10⁻⁴, next to it, smooth, rough, 1 and a little below.
-fn random_alpha(rng: &mut Pcg32) -> f32 {
+pub(crate) fn random_alpha(rng: &mut Pcg32) -> f32 {
     match rng.random_range(0..6) {
         0 => 0.0,
         1 => 1e-4,
@@ -51,7 +51,7 @@ fn random_alpha(rng: &mut Pcg32) -> f32 {
 }
 
 /// A relative IOR, often next to 1 (where refraction half vectors cancel) or exactly 1.
-fn random_eta(rng: &mut Pcg32) -> (f32, f32) {
+pub(crate) fn random_eta(rng: &mut Pcg32) -> (f32, f32) {
     let eta = match rng.random_range(0..6) {
         0 => 1.0,
         1 => 1.0001,
@@ -67,7 +67,7 @@ fn random_eta(rng: &mut Pcg32) -> (f32, f32) {
 
 /// [`random_bsdf`]'s models, and each lane model with parameters at their extremes:
 /// textured and anisotropic roughness, IORs next to 1, textured reflectances.
-fn random_lane_bsdf(rng: &mut Pcg32, depth: u32) -> Bsdf {
+pub(crate) fn random_lane_bsdf(rng: &mut Pcg32, depth: u32) -> Bsdf {
     if rng.random() {
         return random_bsdf(rng, depth);
     }
@@ -185,7 +185,7 @@ fn random_lane_bsdf(rng: &mut Pcg32, depth: u32) -> Bsdf {
 }
 
 /// Directions as [`random_direction`] makes them, and ones with exactly zero components.
-fn direction(rng: &mut Pcg32) -> Vec3 {
+pub(crate) fn direction(rng: &mut Pcg32) -> Vec3 {
     match rng.random_range(0..12) {
         0 => Vec3::new(0.0, 0.0, if rng.random() { 1.0 } else { -1.0 }),
         1 => Vec3::new(if rng.random() { 1.0 } else { -1.0 }, 0.0, 0.0),
@@ -197,11 +197,11 @@ fn direction(rng: &mut Pcg32) -> Vec3 {
     }
 }
 
-fn same(a: f32, b: f32) -> bool {
+pub(crate) fn same(a: f32, b: f32) -> bool {
     a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
 }
 
-fn same3(a: Vec3, b: Vec3) -> bool {
+pub(crate) fn same3(a: Vec3, b: Vec3) -> bool {
     same(a.x, b.x) && same(a.y, b.y) && same(a.z, b.z)
 }
 

@@ -67,6 +67,7 @@ pub mod fresnel;
 pub mod ior;
 mod mask;
 pub mod microfacet;
+mod nested;
 mod normal_map;
 mod null;
 mod perturbed;
@@ -84,6 +85,8 @@ mod twosided;
 
 #[cfg(test)]
 mod lanes_test;
+#[cfg(test)]
+mod lanes_test_principled;
 #[cfg(test)]
 mod testing;
 
@@ -469,6 +472,8 @@ impl Bsdf {
             Bsdf::Phong(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::BlinnPhong(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::CookTorrance(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::PrincipledThin(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::Blend(m) => m.eval_pdf(sp, wi, wo),
             _ => (self.eval(sp, wi, wo), self.pdf(sp, wi, wo)),
         }
     }
@@ -479,7 +484,8 @@ impl Bsdf {
 /// [`Bsdf::sample`] give, bit for bit (the one-path functions call them).
 impl Bsdf {
     /// Whether [`Bsdf::eval_pdf_r`] and [`Bsdf::sample_r`] have this model (`None` from
-    /// them otherwise: the packet loop runs those paths one at a time).
+    /// them otherwise: the packet loop runs those paths one at a time). A model that nests
+    /// others has them if its nested models do.
     #[inline]
     pub fn has_r(&self) -> bool {
         if let Bsdf::TwoSided(m) = self {
@@ -498,7 +504,18 @@ impl Bsdf {
                 | Bsdf::Phong(_)
                 | Bsdf::BlinnPhong(_)
                 | Bsdf::CookTorrance(_)
-        )
+                | Bsdf::Principled(_)
+                | Bsdf::PrincipledThin(_)
+        ) || self.nested_has_r()
+    }
+
+    /// [`Bsdf::has_r`] of the models that nest others (out of line: it recurses).
+    #[inline(never)]
+    fn nested_has_r(&self) -> bool {
+        match self {
+            Bsdf::Blend(m) => m.bsdfs.iter().all(Bsdf::has_r),
+            _ => false,
+        }
     }
 
     /// [`Bsdf::eval_pdf`] over any [`Real`] (lanes for which the model says 0 give 0).
@@ -522,6 +539,9 @@ impl Bsdf {
             Bsdf::BlinnPhong(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::CookTorrance(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::TwoSided(m) => m.eval_pdf_r(sp, wi, wo),
+            Bsdf::Principled(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::PrincipledThin(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::Blend(m) if self.has_r() => Some(m.eval_pdf_r(sp, wi, wo)),
             _ => None,
         }
     }
@@ -548,6 +568,9 @@ impl Bsdf {
             Bsdf::BlinnPhong(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::CookTorrance(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::TwoSided(m) => m.sample_r(sp, wi, u1, u2),
+            Bsdf::Principled(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::PrincipledThin(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::Blend(m) if self.has_r() => Some(m.sample_r(sp, wi, u1, u2)),
             _ => None,
         }
     }

@@ -47,16 +47,22 @@
 //! rather than Mitsuba's nonzero value, so that it is the density of `sample`. The sheen is
 //! added wherever its own mask holds, as Mitsuba's JIT (`llvm`/`cuda`) variants do; the
 //! scalar variants skip it when the diffuse lobe is off (spec_trans = 1, metallic < 1).
+//!
+//! Written once over [`Real`] (`eval_pdf_r`, `sample_r`) for one path or a packet's lanes:
+//! the lobes are masks (a lane adds a lobe's term where its conditions hold; for one path
+//! the `if` of the scalar code), the lobe u1 picks a select. The `has_*` flags are the
+//! material's, tested once for all lanes.
 
-use crate::fresnel::{fresnel_dielectric, reflect_about, refract_about};
-use crate::microfacet::{MicrofacetDistribution, MicrofacetType, Shadowing};
+use crate::fresnel::{fresnel_dielectric_r, reflect_about_r, refract_about_r};
+use crate::microfacet::{MicrofacetDistributionR, MicrofacetType, Shadowing, MIN_ALPHA};
 use crate::principled_helpers::{
-    calc_dist_params, calc_schlick_1, clearcoat_g, mac_mic_compatible, mulsign, principled_fresnel,
-    schlick_weight, tint_color, Gtr1,
+    add_where, calc_dist_params, calc_schlick_1, clearcoat_g, mac_mic_compatible, mulsign, opt_1,
+    principled_fresnel, schlick_weight, tint_color, Gtr1,
 };
-use crate::{BsdfSample, LobeFlags, ShadingPoint, Texture};
+use crate::{BsdfSample, BsdfSampleR, LobeFlags, ShadingPoint, ShadingPointR, Texture};
 use glam::{Vec2, Vec3};
-use radia_math::{luminance, Spectrum, INV_PI};
+use radia_math::real::{Mask, Real, Vector2, Vector3};
+use radia_math::{luminance_r, Spectrum, INV_PI};
 use radia_sampling::warp;
 
 #[derive(Clone, Debug)]
@@ -89,46 +95,53 @@ pub enum PrincipledIor {
     Specular(f32),
 }
 
-/// Lobe selection probabilities (diffuse, clearcoat, transmission, reflection), normalized.
-struct LobeProbabilities {
-    diffuse: f32,
-    clearcoat: f32,
-    spec_trans: f32,
-    spec_reflect: f32,
+/// Lobe selection probabilities (diffuse, clearcoat, transmission, reflection), normalized,
+/// in the lanes of `ok` (where they do not sum to a positive finite number, no lobe).
+struct LobeProbabilities<R: Real> {
+    diffuse: R,
+    clearcoat: R,
+    spec_trans: R,
+    spec_reflect: R,
+    ok: R::Mask,
 }
 
 /// The lobe weights the sampling routine and the pdf need.
-struct Weights {
-    metallic: f32,
-    anisotropic: f32,
-    roughness: f32,
-    clearcoat: f32,
-    brdf: f32,
-    bsdf: f32,
+struct Weights<R> {
+    metallic: R,
+    anisotropic: R,
+    roughness: R,
+    clearcoat: R,
+    brdf: R,
+    bsdf: R,
 }
 
-/// What evaluating the model and its density at (wi, wo) share ([`Principled::pair`]).
-struct Pair {
-    w: Weights,
-    cos_i: f32,
-    cos_o: f32,
-    reflect: bool,
-    refract: bool,
-    front: bool,
+/// What evaluating the model and its density at (wi, wo) share ([`Principled::pair`]), in
+/// the lanes of `valid` (elsewhere both are zero: grazing wi, wo in the plane, no half
+/// vector).
+struct Pair<R: Real> {
+    valid: R::Mask,
+    w: Weights<R>,
+    cos_i: R,
+    cos_o: R,
+    reflect: R::Mask,
+    refract: R::Mask,
+    front: R::Mask,
     /// η on the path's side: η from the front, 1/η from the back.
-    eta_path: f32,
+    eta_path: R,
     /// The half vector on the upper side.
-    wh: Vec3,
-    dist: MicrofacetDistribution,
-    dot_i: f32,
-    dot_o: f32,
+    wh: Vector3<R>,
+    dist: MicrofacetDistributionR<R>,
+    dot_i: R,
+    dot_o: R,
     /// The dielectric Fresnel reflectance at ωh.
-    f: f32,
+    f: R,
 }
 
-#[inline]
-fn opt_1(t: &Option<Texture>, sp: &ShadingPoint) -> f32 {
-    t.as_ref().map_or(0.0, |t| t.eval_1(sp))
+/// A sample and the lobe it came from (the other lanes took a glossy reflection).
+struct LobeSample<R: Real> {
+    s: BsdfSampleR<R>,
+    diffuse: R::Mask,
+    transmission: R::Mask,
 }
 
 impl Principled {
@@ -185,98 +198,210 @@ impl Principled {
     }
 
     #[inline]
-    fn weights(&self, sp: &ShadingPoint) -> Weights {
+    pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
+        self.eval_r(&sp.into(), wi.into(), wo.into()).into()
+    }
+
+    #[inline]
+    pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
+        self.pdf_r(&sp.into(), wi.into(), wo.into())
+    }
+
+    /// [`Principled::eval`] and [`Principled::pdf`] at once: the weights' textures, the half
+    /// vector, the Fresnel term and D(ωh) found once (next-event estimation asks for both at
+    /// every vertex, where the two calls were a fifth of a render of
+    /// `scenes/principled.xml`). The same values bit for bit.
+    #[inline]
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let (f, pdf) = self.eval_pdf_r(&sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
+    }
+
+    #[inline]
+    pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
+        let l = self.sample_lobe(&sp.into(), wi.into(), u1, u2.into());
+        l.s.one_path(if l.diffuse {
+            LobeFlags::DIFFUSE_REFLECTION
+        } else if l.transmission {
+            LobeFlags::GLOSSY_TRANSMISSION
+        } else {
+            LobeFlags::GLOSSY_REFLECTION
+        })
+    }
+
+    /// eval over any [`Real`].
+    #[inline(always)]
+    pub fn eval_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> Vector3<R> {
+        match self.pair(sp, wi, wo) {
+            Some(q) => self.eval_pair(sp, wi, wo, &q, q.dist.eval(q.wh)),
+            None => Vector3::zero(),
+        }
+    }
+
+    /// pdf over any [`Real`].
+    #[inline(always)]
+    pub fn pdf_r<R: Real>(&self, sp: &ShadingPointR<R>, wi: Vector3<R>, wo: Vector3<R>) -> R {
+        match self.pair(sp, wi, wo) {
+            Some(q) => self.pdf_pair(sp, wi, wo, &q, q.dist.eval(q.wh)),
+            None => R::zero(),
+        }
+    }
+
+    /// eval and pdf over any [`Real`], sharing what they can.
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        let Some(q) = self.pair(sp, wi, wo) else {
+            return (Vector3::zero(), R::zero());
+        };
+        let d = q.dist.eval(q.wh);
+        (
+            self.eval_pair(sp, wi, wo, &q, d),
+            self.pdf_pair(sp, wi, wo, &q, d),
+        )
+    }
+
+    /// sample over any [`Real`].
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        self.sample_lobe(sp, wi, u1, u2).s
+    }
+
+    #[inline(always)]
+    fn weights<R: Real>(&self, sp: &ShadingPointR<R>) -> Weights<R> {
+        let one = R::one();
         let metallic = opt_1(&self.metallic, sp);
         let spec_trans = opt_1(&self.spec_trans, sp);
         Weights {
             metallic,
             anisotropic: opt_1(&self.anisotropic, sp),
-            roughness: self.roughness.eval_1(sp),
+            roughness: self.roughness.eval_1_r(sp),
             clearcoat: opt_1(&self.clearcoat, sp),
-            brdf: (1.0 - metallic) * (1.0 - spec_trans),
-            bsdf: (1.0 - metallic) * spec_trans,
+            brdf: (one - metallic) * (one - spec_trans),
+            bsdf: (one - metallic) * spec_trans,
         }
     }
 
-    #[inline]
-    fn distribution(&self, w: &Weights) -> MicrofacetDistribution {
+    /// The GGX distribution of the main specular lobes (α clamped as
+    /// `MicrofacetDistribution::new` clamps it).
+    #[inline(always)]
+    fn distribution<R: Real>(&self, w: &Weights<R>) -> MicrofacetDistributionR<R> {
         let (ax, ay) = calc_dist_params(w.anisotropic, w.roughness, self.anisotropic.is_some());
-        MicrofacetDistribution::new(MicrofacetType::Ggx, ax, ay, true)
+        let min = R::splat(MIN_ALPHA);
+        MicrofacetDistributionR {
+            kind: MicrofacetType::Ggx,
+            alpha_u: ax.max(min),
+            alpha_v: ay.max(min),
+            sample_visible: true,
+        }
     }
 
     /// Mitsuba's lobe probabilities for a dielectric Fresnel `f` (at the sampled or the
-    /// half-vector normal); `None` when they sum to 0.
-    #[inline]
-    fn probabilities(&self, w: &Weights, front: bool, f: f32) -> Option<LobeProbabilities> {
+    /// half-vector normal).
+    #[inline(always)]
+    fn probabilities<R: Real>(&self, w: &Weights<R>, front: R::Mask, f: R) -> LobeProbabilities<R> {
+        let (zero, one, k) = (R::zero(), R::one(), R::splat);
         let has_st = self.spec_trans.is_some();
-        let (mut sr, mut st, mut cc, mut d);
-        if front {
-            sr = self.spec_srate * (1.0 - w.bsdf * (1.0 - f));
-            st = if has_st {
-                self.spec_srate * w.bsdf * (1.0 - f)
-            } else {
-                0.0
-            };
-            cc = if self.clearcoat.is_some() {
-                0.25 * w.clearcoat * self.clearcoat_srate
-            } else {
-                0.0
-            };
-            d = w.brdf * self.diff_refl_srate;
+        let srate = k(self.spec_srate);
+        // From the front.
+        let sr = srate * (one - w.bsdf * (one - f));
+        let st = if has_st {
+            srate * w.bsdf * (one - f)
         } else {
-            sr = f;
-            st = if has_st { 1.0 - f } else { 0.0 };
-            cc = 0.0;
-            d = 0.0;
-        }
+            zero
+        };
+        let cc = if self.clearcoat.is_some() {
+            k(0.25) * w.clearcoat * k(self.clearcoat_srate)
+        } else {
+            zero
+        };
+        let d = w.brdf * k(self.diff_refl_srate);
+        // From the back.
+        let (sr, st, cc, d) = (
+            R::select(front, sr, f),
+            R::select(front, st, if has_st { one - f } else { zero }),
+            R::select(front, cc, zero),
+            R::select(front, d, zero),
+        );
         let total = sr + st + cc + d;
-        if total.is_nan() || total <= 0.0 || !total.is_finite() {
-            return None;
+        let r = one / total;
+        LobeProbabilities {
+            diffuse: d * r,
+            clearcoat: cc * r,
+            spec_trans: st * r,
+            spec_reflect: sr * r,
+            ok: total.greater(zero) & total.is_finite(),
         }
-        let r = 1.0 / total;
-        sr *= r;
-        st *= r;
-        cc *= r;
-        d *= r;
-        Some(LobeProbabilities {
-            diffuse: d,
-            clearcoat: cc,
-            spec_trans: st,
-            spec_reflect: sr,
-        })
     }
 
     /// The half vector of (wi, wo) on the upper side, as Mitsuba's eval and pdf make it:
-    /// normalize(wi + wo) for reflection, normalize(wi + η_path wo) otherwise (in f64: the
-    /// refraction sum nearly cancels for η near 1).
-    #[inline]
-    fn half_vector(wi: Vec3, wo: Vec3, reflect: bool, eta_path: f32) -> Option<Vec3> {
-        let s = if reflect { 1.0 } else { eta_path as f64 };
-        let h = (wi.as_dvec3() + wo.as_dvec3() * s).normalize();
-        let h = if h.z < 0.0 { -h } else { h }.as_vec3();
-        h.is_finite().then_some(h)
+    /// normalize(wi + wo) for reflection, normalize(wi + η_path wo) otherwise. For η near 1
+    /// the refraction sum nearly cancels: each component is made by one fused multiply-add,
+    /// rounded once from the exact sum (as accurate as the sum in f64 it replaces).
+    #[inline(always)]
+    fn half_vector<R: Real>(
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+        reflect: R::Mask,
+        eta_path: R,
+    ) -> Vector3<R> {
+        let s = R::select(reflect, R::one(), eta_path);
+        let h = Vector3::new(
+            s.mul_add(wo.x, wi.x),
+            s.mul_add(wo.y, wi.y),
+            s.mul_add(wo.z, wi.z),
+        )
+        .normalize();
+        mulsign(h, h.z)
     }
 
-    /// What [`Principled::eval`] and [`Principled::pdf`] both find first for (wi, wo): the
-    /// lobe weights, the half vector, the distribution and the Fresnel term there. `None`
-    /// where both are zero (grazing wi, wo in the plane, no half vector).
-    #[inline]
-    fn pair(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Option<Pair> {
+    /// What eval and pdf both find first for (wi, wo): the lobe weights, the half vector,
+    /// the distribution and the Fresnel term there. `None` where no lane has them.
+    #[inline(always)]
+    fn pair<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> Option<Pair<R>> {
+        let zero = R::zero();
         let cos_i = wi.z;
         let cos_o = wo.z;
-        let reflect = cos_i * cos_o > 0.0;
-        let refract = cos_i * cos_o < 0.0;
-        if cos_i == 0.0 || !(reflect || refract) {
+        let reflect = (cos_i * cos_o).greater(zero);
+        let refract = (cos_i * cos_o).less(zero);
+        let valid = !cos_i.equals(zero) & (reflect | refract);
+        if !valid.any() {
+            return None;
+        }
+        let front = cos_i.greater(zero);
+        let eta = R::splat(self.eta);
+        let eta_path = R::select(front, eta, R::one() / eta);
+        let wh = Self::half_vector(wi, wo, reflect, eta_path);
+        let valid = valid & wh.is_finite();
+        if !valid.any() {
             return None;
         }
         let w = self.weights(sp);
-        let front = cos_i > 0.0;
-        let eta_path = if front { self.eta } else { 1.0 / self.eta };
-        let wh = Self::half_vector(wi, wo, reflect, eta_path)?;
         let dist = self.distribution(&w);
         let (dot_i, dot_o) = (wi.dot(wh), wo.dot(wh));
-        let f = fresnel_dielectric(dot_i, self.eta).f;
+        let f = fresnel_dielectric_r(dot_i, eta).f;
         Some(Pair {
+            valid,
             w,
             cos_i,
             cos_o,
@@ -292,49 +417,18 @@ impl Principled {
         })
     }
 
-    #[inline]
-    pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
-        match self.pair(sp, wi, wo) {
-            Some(q) => self.eval_pair(sp, wi, wo, &q, None),
-            None => Spectrum::ZERO,
-        }
-    }
-
-    #[inline]
-    pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        match self.pair(sp, wi, wo) {
-            Some(q) => self.pdf_pair(sp, wi, wo, &q, None),
-            None => 0.0,
-        }
-    }
-
-    /// [`Principled::eval`] and [`Principled::pdf`] at once: the weights' textures, the half
-    /// vector (in f64), the Fresnel term and D(ωh) found once (next-event estimation asks
-    /// for both at every vertex, where the two calls were a fifth of a render of
-    /// `scenes/principled.xml`). The same values bit for bit.
-    #[inline]
-    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
-        let Some(q) = self.pair(sp, wi, wo) else {
-            return (Spectrum::ZERO, 0.0);
-        };
-        let d = q.dist.eval(q.wh);
-        (
-            self.eval_pair(sp, wi, wo, &q, Some(d)),
-            self.pdf_pair(sp, wi, wo, &q, Some(d)),
-        )
-    }
-
-    /// [`Principled::eval`] given its [`Pair`] (and D(ωh) if known).
+    /// eval given its [`Pair`] and D(ωh).
     #[inline(always)]
-    fn eval_pair(
+    fn eval_pair<R: Real>(
         &self,
-        sp: &ShadingPoint,
-        wi: Vec3,
-        wo: Vec3,
-        q: &Pair,
-        d_wh: Option<f32>,
-    ) -> Spectrum {
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+        q: &Pair<R>,
+        d: R,
+    ) -> Vector3<R> {
         let Pair {
+            valid,
             ref w,
             cos_i,
             cos_o,
@@ -348,27 +442,44 @@ impl Principled {
             dot_o,
             f,
         } = *q;
+        let (zero, one, k) = (R::zero(), R::one(), R::splat);
+        let no = R::Mask::splat(false);
+        let eta = k(self.eta);
         let metallic = w.metallic;
-        let base_color = self.base_color.eval(sp);
-        let inv_eta_path = 1.0 / eta_path;
-        let refl_ok = reflect && mac_mic_compatible(wh, wi, wo, cos_i, true);
-        let refr_ok = refract && mac_mic_compatible(wh, wi, wo, cos_i, false);
+        let base_color = self.base_color.eval_r(sp);
+        let inv_eta_path = one / eta_path;
+        let refl_ok = reflect & mac_mic_compatible(wh, wi, wo, cos_i, true);
+        let refr_ok = refract & mac_mic_compatible(wh, wi, wo, cos_i, false);
 
-        let spec_reflect = refl_ok && f > 0.0;
-        let clearcoat = self.clearcoat.is_some() && w.clearcoat > 0.0 && refl_ok && front;
-        let spec_trans = self.spec_trans.is_some() && w.bsdf > 0.0 && refr_ok && f < 1.0;
-        let diffuse = w.brdf > 0.0 && reflect && front;
+        let spec_reflect = refl_ok & f.greater(zero);
+        let clearcoat = if self.clearcoat.is_some() {
+            w.clearcoat.greater(zero) & refl_ok & front
+        } else {
+            no
+        };
+        let spec_trans = if self.spec_trans.is_some() {
+            w.bsdf.greater(zero) & refr_ok & f.less(one)
+        } else {
+            no
+        };
+        let diffuse = w.brdf.greater(zero) & reflect & front;
         let sheen_w = opt_1(&self.sheen, sp);
-        let sheen =
-            self.sheen.is_some() && sheen_w > 0.0 && reflect && 1.0 - metallic > 0.0 && front;
+        let sheen = if self.sheen.is_some() {
+            sheen_w.greater(zero) & reflect & (one - metallic).greater(zero) & front
+        } else {
+            no
+        };
 
-        let mut value = Spectrum::ZERO;
-        if spec_reflect || spec_trans {
-            let d = d_wh.unwrap_or_else(|| dist.eval(wh));
+        let mut value = Vector3::zero();
+        if (spec_reflect | spec_trans).any() {
             let g = dist.g(wi, wo, wh, Shadowing::Separable);
-            if spec_reflect {
+            add_where!(spec_reflect, value, {
                 let has_tint = self.spec_tint.is_some();
-                let lum = if has_tint { luminance(base_color) } else { 1.0 };
+                let lum = if has_tint {
+                    luminance_r(base_color)
+                } else {
+                    one
+                };
                 let spec_tint = opt_1(&self.spec_tint, sp);
                 let fp = principled_fresnel(
                     f,
@@ -379,73 +490,85 @@ impl Principled {
                     dot_i,
                     front,
                     w.bsdf,
-                    self.eta,
+                    eta,
                     self.metallic.is_some(),
                     has_tint,
                 );
-                value += fp * (d * g / (4.0 * cos_i.abs()));
-            }
-            if spec_trans {
+                fp * (d * g / (k(4.0) * cos_i.abs()))
+            });
+            add_where!(spec_trans, value, {
                 // Radiance mode: the 1/η² compression (Mitsuba's `scale`).
                 let scale = inv_eta_path * inv_eta_path;
                 let denom = dot_i + eta_path * dot_o;
-                let t = (scale * (1.0 - f) * d * g * eta_path * eta_path * dot_i * dot_o
+                let t = (scale * (one - f) * d * g * eta_path * eta_path * dot_i * dot_o
                     / (cos_i * denom * denom))
                     .abs();
-                value += base_color.max(Spectrum::ZERO).map(f32::sqrt) * (w.bsdf * t);
-            }
+                let b = base_color;
+                let root = Vector3::new(
+                    b.x.max(zero).sqrt(),
+                    b.y.max(zero).sqrt(),
+                    b.z.max(zero).sqrt(),
+                );
+                root * (w.bsdf * t)
+            });
         }
-        if clearcoat {
-            let gloss = self.clearcoat_gloss.eval_1(sp);
-            let fcc = calc_schlick_1(0.04, dot_i, self.eta);
+        add_where!(clearcoat, value, {
+            let gloss = self.clearcoat_gloss.eval_1_r(sp);
+            let fcc = calc_schlick_1(k(0.04), dot_i, eta);
             let dcc = Gtr1::clearcoat(gloss).eval(wh);
             let gcc = clearcoat_g(wi, wo, wh, 0.25);
-            value += Spectrum::splat(w.clearcoat * 0.25 * fcc * dcc * gcc * cos_o.abs());
-        }
+            Vector3::splat_lanes(w.clearcoat * k(0.25) * fcc * dcc * gcc * cos_o.abs())
+        });
         let cos_d = wh.dot(wo);
-        if diffuse {
+        add_where!(diffuse, value, {
+            let half = k(0.5);
             let fo = schlick_weight(cos_o.abs());
             let fi = schlick_weight(cos_i.abs());
-            let f_diff = (1.0 - 0.5 * fi) * (1.0 - 0.5 * fo);
-            let rr = 2.0 * w.roughness * cos_d * cos_d;
-            let f_retro = rr * (fo + fi + fo * fi * (rr - 1.0));
+            let f_diff = (one - half * fi) * (one - half * fo);
+            let rr = k(2.0) * w.roughness * cos_d * cos_d;
+            let f_retro = rr * (fo + fi + fo * fi * (rr - one));
             let lobe = match &self.flatness {
                 Some(t) => {
                     // Hanrahan–Krueger's flattened "fake subsurface".
-                    let flatness = t.eval_1(sp);
-                    let fss90 = rr / 2.0;
-                    let fss = (1.0 + (fss90 - 1.0) * fo) * (1.0 + (fss90 - 1.0) * fi);
-                    let f_ss = 1.25 * (fss * (1.0 / (cos_o.abs() + cos_i.abs()) - 0.5) + 0.5);
+                    let flatness = t.eval_1_r(sp);
+                    let fss90 = rr / k(2.0);
+                    let fss = (one + (fss90 - one) * fo) * (one + (fss90 - one) * fi);
+                    let f_ss = k(1.25) * (fss * (one / (cos_o.abs() + cos_i.abs()) - half) + half);
                     let a = f_diff + f_retro;
                     a + (f_ss - a) * flatness
                 }
                 None => f_diff + f_retro,
             };
-            value += base_color * (w.brdf * cos_o.abs() * INV_PI * lobe);
-        }
-        if sheen {
+            base_color * (w.brdf * cos_o.abs() * k(INV_PI) * lobe)
+        });
+        add_where!(sheen, value, {
             let fd = schlick_weight(cos_d.abs());
+            let white = Vector3::splat_lanes(one);
             let c_sheen = match &self.sheen_tint {
                 Some(t) => {
-                    let st = t.eval_1(sp);
-                    let c_tint = tint_color(base_color, luminance(base_color));
-                    Spectrum::ONE + (c_tint - Spectrum::ONE) * st
+                    let st = t.eval_1_r(sp);
+                    let c_tint = tint_color(base_color, luminance_r(base_color));
+                    white + (c_tint - white) * st
                 }
-                None => Spectrum::ONE,
+                None => white,
             };
-            value += c_sheen * (sheen_w * (1.0 - metallic) * fd * cos_o.abs());
-        }
-        if value.is_finite() {
-            value
-        } else {
-            Spectrum::ZERO
-        }
+            c_sheen * (sheen_w * (one - metallic) * fd * cos_o.abs())
+        });
+        Vector3::select(valid & value.is_finite(), value, Vector3::zero())
     }
 
-    /// [`Principled::pdf`] given its [`Pair`] (and D(ωh) if known).
+    /// pdf given its [`Pair`] and D(ωh).
     #[inline(always)]
-    fn pdf_pair(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3, q: &Pair, d_wh: Option<f32>) -> f32 {
+    fn pdf_pair<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+        q: &Pair<R>,
+        d: R,
+    ) -> R {
         let Pair {
+            valid,
             ref w,
             cos_i,
             reflect,
@@ -459,116 +582,155 @@ impl Principled {
             f,
             ..
         } = *q;
+        let (zero, k) = (R::zero(), R::splat);
+        let has_st = self.spec_trans.is_some();
         // What `sample` refuses (Mitsuba: `active &= front_side || bsdf > 0`).
-        if !(front || w.bsdf > 0.0 && self.spec_trans.is_some()) {
-            return 0.0;
-        }
-        let d = || d_wh.unwrap_or_else(|| dist.eval(wh));
-        let Some(p) = self.probabilities(w, front, f) else {
-            return 0.0;
+        let sampled = if has_st {
+            front | w.bsdf.greater(zero)
+        } else {
+            front
         };
-        let dwh_dwo = if self.spec_trans.is_some() && !reflect {
+        let p = self.probabilities(w, front, f);
+        let dwh_dwo_reflect = (R::one() / (k(4.0) * dot_o)).abs();
+        let dwh_dwo = if has_st {
             let denom = dot_i + eta_path * dot_o;
-            (eta_path * eta_path * dot_o / (denom * denom)).abs()
+            let refract_form = (eta_path * eta_path * dot_o / (denom * denom)).abs();
+            R::select(reflect, dwh_dwo_reflect, refract_form)
         } else {
-            (1.0 / (4.0 * dot_o)).abs()
+            dwh_dwo_reflect
         };
-        let mut pdf = 0.0;
-        let refl_ok = reflect && mac_mic_compatible(wh, wi, wo, cos_i, true);
-        let wi_up = mulsign(wi, cos_i);
-        if refl_ok && p.spec_reflect > 0.0 {
-            pdf += p.spec_reflect * dist.pdf_given(d(), wi_up, wh) * dwh_dwo;
-        }
-        if reflect {
-            pdf += p.diffuse * warp::cosine_hemisphere_pdf(wo);
-        }
-        if self.spec_trans.is_some()
-            && refract
-            && p.spec_trans > 0.0
-            && mac_mic_compatible(wh, wi, wo, cos_i, false)
-        {
-            pdf += p.spec_trans * dist.pdf_given(d(), wi_up, wh) * dwh_dwo;
-        }
-        if self.clearcoat.is_some() && refl_ok && p.clearcoat > 0.0 {
-            let gloss = self.clearcoat_gloss.eval_1(sp);
-            pdf += p.clearcoat * Gtr1::clearcoat(gloss).pdf(wh) * dwh_dwo;
-        }
-        if pdf.is_finite() {
-            pdf
+        let refl_ok = reflect & mac_mic_compatible(wh, wi, wo, cos_i, true);
+        let spec_reflect = refl_ok & p.spec_reflect.greater(zero);
+        let spec_trans = if has_st {
+            refract & p.spec_trans.greater(zero) & mac_mic_compatible(wh, wi, wo, cos_i, false)
         } else {
-            0.0
+            R::Mask::splat(false)
+        };
+        let pdf_m = if (spec_reflect | spec_trans).any() {
+            dist.pdf_given(d, mulsign(wi, cos_i), wh)
+        } else {
+            zero
+        };
+        let mut pdf = zero;
+        add_where!(spec_reflect, pdf, { p.spec_reflect * pdf_m * dwh_dwo });
+        add_where!(reflect, pdf, {
+            p.diffuse * warp::cosine_hemisphere_pdf_r(wo)
+        });
+        add_where!(spec_trans, pdf, { p.spec_trans * pdf_m * dwh_dwo });
+        if self.clearcoat.is_some() {
+            add_where!(refl_ok & p.clearcoat.greater(zero), pdf, {
+                let gloss = self.clearcoat_gloss.eval_1_r(sp);
+                p.clearcoat * Gtr1::clearcoat(gloss).pdf(wh) * dwh_dwo
+            });
         }
+        R::select(valid & sampled & p.ok & pdf.is_finite(), pdf, zero)
     }
 
-    #[inline]
-    pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
+    /// sample over any [`Real`], with the lanes that chose the diffuse lobe and the
+    /// transmission.
+    #[inline(always)]
+    fn sample_lobe<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> LobeSample<R> {
+        let (zero, one) = (R::zero(), R::one());
+        let no = R::Mask::splat(false);
+        let none = LobeSample {
+            s: BsdfSampleR::none(),
+            diffuse: no,
+            transmission: no,
+        };
+        let has_st = self.spec_trans.is_some();
         let cos_i = wi.z;
-        if cos_i == 0.0 || !wi.is_finite() {
-            return None;
+        let mut valid = !cos_i.equals(zero) & wi.is_finite();
+        if !valid.any() {
+            return none;
         }
         let w = self.weights(sp);
-        let front = cos_i > 0.0;
-        let bsdf = if self.spec_trans.is_some() {
-            w.bsdf
+        let front = cos_i.greater(zero);
+        if has_st {
+            valid &= front | w.bsdf.greater(zero);
         } else {
-            0.0
-        };
-        if !front && (bsdf.is_nan() || bsdf <= 0.0) {
-            return None;
+            valid &= front;
+        }
+        if !valid.any() {
+            return none;
         }
         let dist = self.distribution(&w);
         let (m_spec, pdf_m) = dist.sample(mulsign(wi, cos_i), u2);
-        if pdf_m.is_nan() || pdf_m <= 0.0 || !m_spec.is_finite() {
-            return None;
+        valid &= pdf_m.greater(zero) & m_spec.is_finite();
+        if !valid.any() {
+            return none;
         }
-        let fr = fresnel_dielectric(wi.dot(m_spec), self.eta);
-        let p = self.probabilities(&w, front, fr.f)?;
-        let (wo, lobe, eta) = if u1 < p.diffuse {
-            let wo = warp::square_to_cosine_hemisphere(u2);
-            if cos_i * wo.z <= 0.0 {
-                return None;
-            }
-            (wo, LobeFlags::DIFFUSE_REFLECTION, 1.0)
-        } else if u1 < p.diffuse + p.clearcoat {
-            let gloss = self.clearcoat_gloss.eval_1(sp);
-            let m = Gtr1::clearcoat(gloss).sample(u2);
-            let wo = reflect_about(wi, m);
-            if !(cos_i * wo.z > 0.0 && mac_mic_compatible(m, wi, wo, cos_i, true)) {
-                return None;
-            }
-            (wo, LobeFlags::GLOSSY_REFLECTION, 1.0)
-        } else if self.spec_trans.is_some() && u1 < p.diffuse + p.clearcoat + p.spec_trans {
-            let wo = refract_about(wi, m_spec, fr.cos_theta_t, fr.eta_ti);
-            if !(cos_i * wo.z < 0.0 && mac_mic_compatible(m_spec, wi, wo, cos_i, false)) {
-                return None;
-            }
-            (wo, LobeFlags::GLOSSY_TRANSMISSION, fr.eta_it)
+        let fr = fresnel_dielectric_r(wi.dot(m_spec), R::splat(self.eta));
+        let p = self.probabilities(&w, front, fr.f);
+        valid &= p.ok;
+        if !valid.any() {
+            return none;
+        }
+        // The lobe, as Mitsuba orders them on u1: diffuse, clearcoat, transmission,
+        // reflection.
+        let is_diffuse = u1.less(p.diffuse);
+        let c_clearcoat = p.diffuse + p.clearcoat;
+        let is_clearcoat = !is_diffuse & u1.less(c_clearcoat);
+        let is_trans = if has_st {
+            !is_diffuse & !is_clearcoat & u1.less(c_clearcoat + p.spec_trans)
         } else {
-            let wo = reflect_about(wi, m_spec);
-            if !(cos_i * wo.z > 0.0 && mac_mic_compatible(m_spec, wi, wo, cos_i, true)) {
-                return None;
-            }
-            (wo, LobeFlags::GLOSSY_REFLECTION, 1.0)
+            no
         };
-        let wo = wo.normalize();
-        let pdf = self.pdf(sp, wi, wo);
-        if pdf.is_nan() || pdf <= 0.0 {
-            return None;
+        // Specular reflection, and where another lobe was chosen its direction instead.
+        let mut wo = reflect_about_r(wi, m_spec);
+        let mut ok = (cos_i * wo.z).greater(zero) & mac_mic_compatible(m_spec, wi, wo, cos_i, true);
+        if is_trans.any() {
+            let t = refract_about_r(wi, m_spec, fr.cos_theta_t, fr.eta_ti);
+            let t_ok = (cos_i * t.z).less(zero) & mac_mic_compatible(m_spec, wi, t, cos_i, false);
+            wo = Vector3::select(is_trans, t, wo);
+            ok = (is_trans & t_ok) | (!is_trans & ok);
         }
-        let weight = self.eval(sp, wi, wo) / pdf;
-        weight.is_finite().then_some(BsdfSample {
-            wo,
-            weight,
-            pdf,
-            eta,
-            lobe,
-        })
+        if is_clearcoat.any() {
+            let gloss = self.clearcoat_gloss.eval_1_r(sp);
+            let m = Gtr1::clearcoat(gloss).sample(u2);
+            let c = reflect_about_r(wi, m);
+            let c_ok = (cos_i * c.z).greater(zero) & mac_mic_compatible(m, wi, c, cos_i, true);
+            wo = Vector3::select(is_clearcoat, c, wo);
+            ok = (is_clearcoat & c_ok) | (!is_clearcoat & ok);
+        }
+        if is_diffuse.any() {
+            let c = warp::square_to_cosine_hemisphere_r(u2);
+            let c_ok = (cos_i * c.z).greater(zero);
+            wo = Vector3::select(is_diffuse, c, wo);
+            ok = (is_diffuse & c_ok) | (!is_diffuse & ok);
+        }
+        valid &= ok;
+        if !valid.any() {
+            return none;
+        }
+        let wo = wo.normalize();
+        let (value, pdf) = self.eval_pdf_r(sp, wi, wo);
+        valid &= pdf.greater(zero);
+        let weight = value.div(pdf);
+        LobeSample {
+            s: BsdfSampleR {
+                wo,
+                weight,
+                pdf,
+                eta: R::select(is_trans, fr.eta_it, one),
+                valid: valid & weight.is_finite(),
+                delta: no,
+            },
+            diffuse: is_diffuse,
+            transmission: is_trans,
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fresnel::fresnel_dielectric;
     use crate::testing::*;
     use crate::Bsdf;
 

@@ -32,14 +32,22 @@
 //! transmission with probabilities ∝ st·rate/2, st·rate/2, rate(1 − st)(1 − dt) and
 //! rate(1 − st)dt (the four `*_sampling_rate`s); the weight is eval/pdf of the mixture.
 //! Transmission keeps η = 1 (both sides of the sheet are the same medium).
+//!
+//! Written once over [`Real`] (`eval_pdf_r`, `sample_r`) for one path or a packet's lanes,
+//! as `principled`. A lane's specular lobe is one visible-normal sample of the reflection
+//! or the transmission distribution, whichever it chose (their roughness selected per
+//! lane).
 
-use crate::microfacet::{MicrofacetDistribution, MicrofacetType, Shadowing};
+use crate::fresnel::{fresnel_dielectric_r, reflect_about_r};
+use crate::microfacet::{MicrofacetDistributionR, MicrofacetType, Shadowing, MIN_ALPHA};
 use crate::principled_helpers::{
-    calc_dist_params, mac_mic_compatible, mulsign, schlick_weight, thin_fresnel, tint_color,
+    add_where, calc_dist_params, mac_mic_compatible, mulsign, opt_1, schlick_weight, thin_fresnel,
+    tint_color,
 };
-use crate::{BsdfSample, LobeFlags, ShadingPoint, Texture};
+use crate::{BsdfSample, BsdfSampleR, LobeFlags, ShadingPoint, ShadingPointR, Texture};
 use glam::{Vec2, Vec3};
-use radia_math::{luminance, Spectrum, INV_PI};
+use radia_math::real::{Mask, Real, Vector2, Vector3};
+use radia_math::{luminance_r, Spectrum, INV_PI};
 use radia_sampling::warp;
 
 #[derive(Clone, Debug)]
@@ -65,20 +73,50 @@ pub struct PrincipledThin {
     pub diff_trans_srate: f32,
 }
 
-#[inline]
-fn opt_1(t: &Option<Texture>, sp: &ShadingPoint) -> f32 {
-    t.as_ref().map_or(0.0, |t| t.eval_1(sp))
+/// The parameters at a shading point.
+struct Params<R> {
+    anisotropic: R,
+    roughness: R,
+    /// spec_trans.
+    st: R,
+    eta: R,
+    /// diff_trans / 2.
+    dt: R,
 }
 
-/// The weights at a shading point and the lobe probabilities (normalized).
-struct Lobes {
-    anisotropic: f32,
-    roughness: f32,
-    eta: f32,
-    p_spec_reflect: f32,
-    p_spec_trans: f32,
-    p_diff_reflect: f32,
-    p_diff_trans: f32,
+/// The lobe probabilities (normalized), in the lanes of `ok` (where they do not sum to a
+/// positive finite number, no lobe).
+struct Lobes<R: Real> {
+    spec_reflect: R,
+    spec_trans: R,
+    diff_reflect: R,
+    diff_trans: R,
+    ok: R::Mask,
+}
+
+/// What eval and pdf share at (wi, wo): the parameters, both directions turned so that wi
+/// is on the front (the model is the same from both sides), the half vector of wi and wo
+/// mirrored up, and the distribution of the lobe wo is in (reflection or transmission).
+struct Setup<R: Real> {
+    /// wi not in the plane (elsewhere eval and pdf are zero).
+    nonzero: R::Mask,
+    p: Params<R>,
+    wi: Vector3<R>,
+    wo: Vector3<R>,
+    /// |cos θi|.
+    cos_i: R,
+    cos_o: R,
+    reflect: R::Mask,
+    refract: R::Mask,
+    wo_r: Vector3<R>,
+    wh: Vector3<R>,
+    wh_ok: R::Mask,
+    /// The reflection lobe's distribution where wo is above, the transmission lobe's below.
+    dist: MicrofacetDistributionR<R>,
+    /// D(ωh) of `dist` (where the model has the specular lobes).
+    d: R,
+    /// Lanes where the specular lobes are on in eval (spec_trans > 0).
+    spec: R::Mask,
 }
 
 impl PrincipledThin {
@@ -116,261 +154,422 @@ impl PrincipledThin {
     }
 
     #[inline]
-    fn lobes(&self, sp: &ShadingPoint) -> Option<Lobes> {
-        let has_st = self.spec_trans.is_some();
-        let st = opt_1(&self.spec_trans, sp);
-        let dt = opt_1(&self.diff_trans, sp) / 2.0;
-        let mut sr = if has_st {
-            st * self.spec_refl_srate / 2.0
-        } else {
-            0.0
-        };
-        let mut sti = if has_st {
-            st * self.spec_trans_srate / 2.0
-        } else {
-            0.0
-        };
-        let mut dr = self.diff_refl_srate * (1.0 - st) * (1.0 - dt);
-        let mut dti = if self.diff_trans.is_some() {
-            self.diff_trans_srate * (1.0 - st) * dt
-        } else {
-            0.0
-        };
-        let total = sr + sti + dr + dti;
-        if total.is_nan() || total <= 0.0 || !total.is_finite() {
-            return None;
-        }
-        let r = 1.0 / total;
-        sr *= r;
-        sti *= r;
-        dr *= r;
-        dti *= r;
-        Some(Lobes {
-            anisotropic: opt_1(&self.anisotropic, sp),
-            roughness: self.roughness.eval_1(sp),
-            eta: self.eta.eval_1(sp),
-            p_spec_reflect: sr,
-            p_spec_trans: sti,
-            p_diff_reflect: dr,
-            p_diff_trans: dti,
-        })
-    }
-
-    /// The reflection lobe's distribution and the transmission lobe's (roughness scaled by
-    /// 0.65 η − 0.35).
-    #[inline]
-    fn distributions(&self, l: &Lobes) -> (MicrofacetDistribution, MicrofacetDistribution) {
-        let has_aniso = self.anisotropic.is_some();
-        let (ax, ay) = calc_dist_params(l.anisotropic, l.roughness, has_aniso);
-        let scaled = (0.65 * l.eta - 0.35) * l.roughness;
-        let (tx, ty) = calc_dist_params(l.anisotropic, scaled, has_aniso);
-        (
-            MicrofacetDistribution::new(MicrofacetType::Ggx, ax, ay, true),
-            MicrofacetDistribution::new(MicrofacetType::Ggx, tx, ty, true),
-        )
-    }
-
-    #[inline]
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
-        let cos_i = wi.z;
-        if cos_i == 0.0 {
-            return Spectrum::ZERO;
-        }
-        let anisotropic = opt_1(&self.anisotropic, sp);
-        let roughness = self.roughness.eval_1(sp);
-        let st = opt_1(&self.spec_trans, sp);
-        let eta = self.eta.eval_1(sp);
-        let dt = opt_1(&self.diff_trans, sp) / 2.0;
-        let base_color = self.base_color.eval(sp);
-        // The model is symmetric: turn both directions so that wi is on the front.
-        let wi = mulsign(wi, cos_i);
-        let wo = mulsign(wo, cos_i);
-        let cos_i = cos_i.abs();
-        let cos_o = wo.z;
-        let reflect = cos_o > 0.0;
-        let refract = cos_o < 0.0;
-        if !(reflect || refract) {
-            return Spectrum::ZERO;
-        }
-        let wo_r = Vec3::new(wo.x, wo.y, wo.z.abs());
-        let wh = (wi + wo_r).normalize();
-        if !wh.is_finite() {
-            return Spectrum::ZERO;
-        }
-        let l = Lobes {
-            anisotropic,
-            roughness,
-            eta,
-            p_spec_reflect: 0.0,
-            p_spec_trans: 0.0,
-            p_diff_reflect: 0.0,
-            p_diff_trans: 0.0,
-        };
-        let mut value = Spectrum::ZERO;
-        if self.spec_trans.is_some() && st > 0.0 {
-            let f = crate::fresnel::fresnel_dielectric(wi.dot(wh), eta).f;
-            let (dr, dt_dist) = self.distributions(&l);
-            if reflect && mac_mic_compatible(wh, wi, wo, wi.z, true) {
-                let has_tint = self.spec_tint.is_some();
-                let lum = if has_tint { luminance(base_color) } else { 1.0 };
-                let tint = opt_1(&self.spec_tint, sp);
-                let f_thin = thin_fresnel(f, tint, base_color, lum, wi.dot(wh), eta, has_tint);
-                let d = dr.eval(wh);
-                let g = dr.g(wi, wo, wh, Shadowing::Separable);
-                value += f_thin * (st * d * g / (4.0 * cos_i));
-            }
-            if refract && mac_mic_compatible(wh, wi, wo, wi.z, false) {
-                let d = dt_dist.eval(wh);
-                let g = dt_dist.g(wi, wo, wh, Shadowing::Separable);
-                value += base_color * (st * (1.0 - f) * d * g / (4.0 * cos_i));
-            }
-        }
-        if reflect && st < 1.0 && dt < 1.0 {
-            let fo = schlick_weight(cos_o.abs());
-            let fi = schlick_weight(cos_i);
-            let f_diff = (1.0 - 0.5 * fi) * (1.0 - 0.5 * fo);
-            let cos_d = wh.dot(wo);
-            let rr = 2.0 * roughness * cos_d * cos_d;
-            let f_retro = rr * (fo + fi + fo * fi * (rr - 1.0));
-            let lobe = match &self.flatness {
-                Some(t) => {
-                    let flatness = t.eval_1(sp);
-                    let fss90 = rr / 2.0;
-                    let fss = (1.0 + (fss90 - 1.0) * fo) * (1.0 + (fss90 - 1.0) * fi);
-                    let f_ss = 1.25 * (fss * (1.0 / (cos_o.abs() + cos_i) - 0.5) + 0.5);
-                    let a = f_diff + f_retro;
-                    a + (f_ss - a) * flatness
-                }
-                None => f_diff + f_retro,
-            };
-            value += base_color * ((1.0 - st) * cos_o * INV_PI * (1.0 - dt) * lobe);
-            let sheen = opt_1(&self.sheen, sp);
-            if self.sheen.is_some() && sheen > 0.0 {
-                let fd = schlick_weight(cos_d.abs());
-                let c_sheen = match &self.sheen_tint {
-                    Some(t) => {
-                        let s = t.eval_1(sp);
-                        let c_tint = tint_color(base_color, luminance(base_color));
-                        Spectrum::ONE + (c_tint - Spectrum::ONE) * s
-                    }
-                    None => Spectrum::ONE,
-                };
-                value += c_sheen * (sheen * (1.0 - st) * fd * (1.0 - dt) * cos_o.abs());
-            }
-        }
-        if self.diff_trans.is_some() && refract && st < 1.0 && dt > 0.0 {
-            value += base_color * ((1.0 - st) * dt * INV_PI * cos_o.abs());
-        }
-        if value.is_finite() {
-            value
-        } else {
-            Spectrum::ZERO
+        let sp = sp.into();
+        match self.setup(&sp, wi.into(), wo.into()) {
+            Some(q) => self.eval_setup(&sp, &q).into(),
+            None => Spectrum::ZERO,
         }
     }
 
     #[inline]
     pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        let cos_i = wi.z;
-        if cos_i == 0.0 {
-            return 0.0;
+        let sp = sp.into();
+        match self.setup(&sp, wi.into(), wo.into()) {
+            Some(q) => self.pdf_setup(&q),
+            None => 0.0,
         }
-        let Some(l) = self.lobes(sp) else {
-            return 0.0;
-        };
-        let wi = mulsign(wi, cos_i);
-        let wo = mulsign(wo, cos_i);
-        let reflect = wo.z > 0.0;
-        let refract = wo.z < 0.0;
-        let mut pdf = 0.0;
-        if self.spec_trans.is_some() {
-            let wo_r = Vec3::new(wo.x, wo.y, wo.z.abs());
-            let wh = (wi + wo_r).normalize();
-            if wh.is_finite() {
-                let dwh_dwo = (1.0 / (4.0 * wo_r.dot(wh))).abs();
-                let (dr, dt) = self.distributions(&l);
-                if reflect && l.p_spec_reflect > 0.0 && mac_mic_compatible(wh, wi, wo, wi.z, true) {
-                    pdf += l.p_spec_reflect * dr.pdf(wi, wh) * dwh_dwo;
-                }
-                if refract && l.p_spec_trans > 0.0 && mac_mic_compatible(wh, wi, wo, wi.z, false) {
-                    pdf += l.p_spec_trans * dt.pdf(wi, wh) * dwh_dwo;
-                }
-            }
-        }
-        if reflect {
-            pdf += l.p_diff_reflect * warp::cosine_hemisphere_pdf(wo);
-        }
-        if self.diff_trans.is_some() && refract {
-            pdf += l.p_diff_trans * warp::cosine_hemisphere_pdf(-wo);
-        }
-        if pdf.is_finite() {
-            pdf
-        } else {
-            0.0
-        }
+    }
+
+    /// [`PrincipledThin::eval`] and [`PrincipledThin::pdf`] at once: the textures, the half
+    /// vector and D(ωh) found once. The same values bit for bit.
+    #[inline]
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let (f, pdf) = self.eval_pdf_r(&sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
     }
 
     #[inline]
     pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
+        let (s, lobe) = self.sample_lobe(&sp.into(), wi.into(), u1, u2.into());
+        s.one_path(lobe.flags())
+    }
+
+    /// eval and pdf over any [`Real`].
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        match self.setup(sp, wi, wo) {
+            Some(q) => (self.eval_setup(sp, &q), self.pdf_setup(&q)),
+            None => (Vector3::zero(), R::zero()),
+        }
+    }
+
+    /// sample over any [`Real`].
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        self.sample_lobe(sp, wi, u1, u2).0
+    }
+
+    #[inline(always)]
+    fn params<R: Real>(&self, sp: &ShadingPointR<R>) -> Params<R> {
+        Params {
+            anisotropic: opt_1(&self.anisotropic, sp),
+            roughness: self.roughness.eval_1_r(sp),
+            st: opt_1(&self.spec_trans, sp),
+            eta: self.eta.eval_1_r(sp),
+            dt: opt_1(&self.diff_trans, sp) / R::splat(2.0),
+        }
+    }
+
+    /// The lobe probabilities: ∝ st·rate/2, st·rate/2, rate(1 − st)(1 − dt), rate(1 − st)dt.
+    #[inline(always)]
+    fn lobes<R: Real>(&self, p: &Params<R>) -> Lobes<R> {
+        let (zero, one, k) = (R::zero(), R::one(), R::splat);
+        let two = k(2.0);
+        let has_st = self.spec_trans.is_some();
+        let (st, dt) = (p.st, p.dt);
+        let sr = if has_st {
+            st * k(self.spec_refl_srate) / two
+        } else {
+            zero
+        };
+        let sti = if has_st {
+            st * k(self.spec_trans_srate) / two
+        } else {
+            zero
+        };
+        let dr = k(self.diff_refl_srate) * (one - st) * (one - dt);
+        let dti = if self.diff_trans.is_some() {
+            k(self.diff_trans_srate) * (one - st) * dt
+        } else {
+            zero
+        };
+        let total = sr + sti + dr + dti;
+        let r = one / total;
+        Lobes {
+            spec_reflect: sr * r,
+            spec_trans: sti * r,
+            diff_reflect: dr * r,
+            diff_trans: dti * r,
+            ok: total.greater(zero) & total.is_finite(),
+        }
+    }
+
+    /// The reflection lobe's distribution and the transmission lobe's (roughness scaled by
+    /// 0.65 η − 0.35), where `reflection` holds and elsewhere (α clamped as
+    /// `MicrofacetDistribution::new` clamps it).
+    #[inline(always)]
+    fn distribution<R: Real>(
+        &self,
+        p: &Params<R>,
+        reflection: R::Mask,
+    ) -> MicrofacetDistributionR<R> {
+        let has_aniso = self.anisotropic.is_some();
+        let (ax, ay) = calc_dist_params(p.anisotropic, p.roughness, has_aniso);
+        let scaled = (R::splat(0.65) * p.eta - R::splat(0.35)) * p.roughness;
+        let (tx, ty) = calc_dist_params(p.anisotropic, scaled, has_aniso);
+        let min = R::splat(MIN_ALPHA);
+        MicrofacetDistributionR {
+            kind: MicrofacetType::Ggx,
+            alpha_u: R::select(reflection, ax, tx).max(min),
+            alpha_v: R::select(reflection, ay, ty).max(min),
+            sample_visible: true,
+        }
+    }
+
+    /// What eval and pdf share at (wi, wo); `None` where no lane has wi off the plane.
+    #[inline(always)]
+    fn setup<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> Option<Setup<R>> {
+        let zero = R::zero();
         let cos_i = wi.z;
-        if cos_i == 0.0 || !wi.is_finite() {
+        let nonzero = !cos_i.equals(zero);
+        if !nonzero.any() {
             return None;
         }
-        let l = self.lobes(sp)?;
+        let p = self.params(sp);
+        let wi = mulsign(wi, cos_i);
+        let wo = mulsign(wo, cos_i);
+        let cos_o = wo.z;
+        let reflect = cos_o.greater(zero);
+        let refract = cos_o.less(zero);
+        let wo_r = Vector3::new(wo.x, wo.y, wo.z.abs());
+        let wh = (wi + wo_r).normalize();
+        let wh_ok = wh.is_finite();
+        let dist = self.distribution(&p, reflect);
+        let (d, spec) = if self.spec_trans.is_some() {
+            let on = nonzero & wh_ok & (reflect | refract);
+            let d = if on.any() { dist.eval(wh) } else { zero };
+            (d, on & p.st.greater(zero))
+        } else {
+            (zero, R::Mask::splat(false))
+        };
+        Some(Setup {
+            nonzero,
+            p,
+            wi,
+            wo,
+            cos_i: cos_i.abs(),
+            cos_o,
+            reflect,
+            refract,
+            wo_r,
+            wh,
+            wh_ok,
+            dist,
+            d,
+            spec,
+        })
+    }
+
+    /// eval given its [`Setup`].
+    #[inline(always)]
+    fn eval_setup<R: Real>(&self, sp: &ShadingPointR<R>, q: &Setup<R>) -> Vector3<R> {
+        let Setup {
+            nonzero,
+            ref p,
+            wi,
+            wo,
+            cos_i,
+            cos_o,
+            reflect,
+            refract,
+            wh,
+            wh_ok,
+            ref dist,
+            d,
+            spec,
+            ..
+        } = *q;
+        let (zero, one, k) = (R::zero(), R::one(), R::splat);
+        let (st, dt) = (p.st, p.dt);
+        let base_color = self.base_color.eval_r(sp);
+        let mut value = Vector3::zero();
+        if spec.any() {
+            let f = fresnel_dielectric_r(wi.dot(wh), p.eta).f;
+            let g = dist.g(wi, wo, wh, Shadowing::Separable);
+            let four_cos_i = k(4.0) * cos_i;
+            let spec_reflect = spec & reflect & mac_mic_compatible(wh, wi, wo, wi.z, true);
+            add_where!(spec_reflect, value, {
+                let has_tint = self.spec_tint.is_some();
+                let lum = if has_tint {
+                    luminance_r(base_color)
+                } else {
+                    one
+                };
+                let tint = opt_1(&self.spec_tint, sp);
+                let f_thin = thin_fresnel(f, tint, base_color, lum, wi.dot(wh), p.eta, has_tint);
+                f_thin * (st * d * g / four_cos_i)
+            });
+            let spec_trans = spec & refract & mac_mic_compatible(wh, wi, wo, wi.z, false);
+            add_where!(spec_trans, value, {
+                base_color * (st * (one - f) * d * g / four_cos_i)
+            });
+        }
+        let diffuse = reflect & st.less(one) & dt.less(one);
+        let cos_d = wh.dot(wo);
+        add_where!(diffuse, value, {
+            let half = k(0.5);
+            let fo = schlick_weight(cos_o.abs());
+            let fi = schlick_weight(cos_i);
+            let f_diff = (one - half * fi) * (one - half * fo);
+            let rr = k(2.0) * p.roughness * cos_d * cos_d;
+            let f_retro = rr * (fo + fi + fo * fi * (rr - one));
+            let lobe = match &self.flatness {
+                Some(t) => {
+                    let flatness = t.eval_1_r(sp);
+                    let fss90 = rr / k(2.0);
+                    let fss = (one + (fss90 - one) * fo) * (one + (fss90 - one) * fi);
+                    let f_ss = k(1.25) * (fss * (one / (cos_o.abs() + cos_i) - half) + half);
+                    let a = f_diff + f_retro;
+                    a + (f_ss - a) * flatness
+                }
+                None => f_diff + f_retro,
+            };
+            base_color * ((one - st) * cos_o * k(INV_PI) * (one - dt) * lobe)
+        });
+        if self.sheen.is_some() {
+            let sheen = opt_1(&self.sheen, sp);
+            add_where!(diffuse & sheen.greater(zero), value, {
+                let fd = schlick_weight(cos_d.abs());
+                let white = Vector3::splat_lanes(one);
+                let c_sheen = match &self.sheen_tint {
+                    Some(t) => {
+                        let s = t.eval_1_r(sp);
+                        let c_tint = tint_color(base_color, luminance_r(base_color));
+                        white + (c_tint - white) * s
+                    }
+                    None => white,
+                };
+                c_sheen * (sheen * (one - st) * fd * (one - dt) * cos_o.abs())
+            });
+        }
+        if self.diff_trans.is_some() {
+            let m = refract & st.less(one) & dt.greater(zero);
+            add_where!(m, value, {
+                base_color * ((one - st) * dt * k(INV_PI) * cos_o.abs())
+            });
+        }
+        let valid = nonzero & (reflect | refract) & wh_ok & value.is_finite();
+        Vector3::select(valid, value, Vector3::zero())
+    }
+
+    /// pdf given its [`Setup`].
+    #[inline(always)]
+    fn pdf_setup<R: Real>(&self, q: &Setup<R>) -> R {
+        let Setup {
+            nonzero,
+            ref p,
+            wi,
+            wo,
+            reflect,
+            refract,
+            wo_r,
+            wh,
+            wh_ok,
+            ref dist,
+            d,
+            ..
+        } = *q;
+        let zero = R::zero();
+        let l = self.lobes(p);
+        let mut pdf = zero;
+        if self.spec_trans.is_some() {
+            let dwh_dwo = (R::one() / (R::splat(4.0) * wo_r.dot(wh))).abs();
+            let spec_reflect = wh_ok
+                & reflect
+                & l.spec_reflect.greater(zero)
+                & mac_mic_compatible(wh, wi, wo, wi.z, true);
+            let spec_trans = wh_ok
+                & refract
+                & l.spec_trans.greater(zero)
+                & mac_mic_compatible(wh, wi, wo, wi.z, false);
+            if (spec_reflect | spec_trans).any() {
+                let pdf_m = dist.pdf_given(d, wi, wh);
+                add_where!(spec_reflect, pdf, { l.spec_reflect * pdf_m * dwh_dwo });
+                add_where!(spec_trans, pdf, { l.spec_trans * pdf_m * dwh_dwo });
+            }
+        }
+        add_where!(reflect, pdf, {
+            l.diff_reflect * warp::cosine_hemisphere_pdf_r(wo)
+        });
+        if self.diff_trans.is_some() {
+            add_where!(refract, pdf, {
+                l.diff_trans * warp::cosine_hemisphere_pdf_r(-wo)
+            });
+        }
+        R::select(nonzero & l.ok & pdf.is_finite(), pdf, zero)
+    }
+
+    /// sample over any [`Real`], with the lobe each lane chose.
+    #[inline(always)]
+    fn sample_lobe<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> (BsdfSampleR<R>, ThinLobe<R>) {
+        let zero = R::zero();
+        let no = R::Mask::splat(false);
+        let none = (
+            BsdfSampleR::none(),
+            ThinLobe {
+                spec_reflect: no,
+                spec_trans: no,
+                diff_reflect: no,
+            },
+        );
+        let cos_i = wi.z;
+        let mut valid = !cos_i.equals(zero) & wi.is_finite();
+        if !valid.any() {
+            return none;
+        }
+        let p = self.params(sp);
+        let l = self.lobes(&p);
+        valid &= l.ok;
+        if !valid.any() {
+            return none;
+        }
         let wi_f = mulsign(wi, cos_i);
         let has_st = self.spec_trans.is_some();
-        let c1 = l.p_spec_reflect;
-        let c2 = c1 + l.p_spec_trans;
-        let c3 = c2 + l.p_diff_reflect;
-        let (wo, lobe) = if has_st && u1 < c1 {
-            let (dr, _) = self.distributions(&l);
-            let (m, pm) = dr.sample(wi_f, u2);
-            if pm.is_nan() || pm <= 0.0 {
-                return None;
-            }
-            let wo = crate::fresnel::reflect_about(wi_f, m);
-            if !(wo.z > 0.0 && mac_mic_compatible(m, wi_f, wo, wi_f.z, true)) {
-                return None;
-            }
-            (wo, LobeFlags::GLOSSY_REFLECTION)
-        } else if has_st && u1 < c2 {
-            let (_, dt) = self.distributions(&l);
-            let (m, pm) = dt.sample(wi_f, u2);
-            if pm.is_nan() || pm <= 0.0 {
-                return None;
-            }
-            let r = crate::fresnel::reflect_about(wi_f, m);
-            let wo = Vec3::new(r.x, r.y, -r.z);
-            if !(wo.z < 0.0 && mac_mic_compatible(m, wi_f, wo, wi_f.z, false)) {
-                return None;
-            }
-            (wo, LobeFlags::GLOSSY_TRANSMISSION)
-        } else if u1 < c3 {
-            (
-                warp::square_to_cosine_hemisphere(u2),
-                LobeFlags::DIFFUSE_REFLECTION,
-            )
-        } else if self.diff_trans.is_some() {
-            (
-                -warp::square_to_cosine_hemisphere(u2),
-                LobeFlags::DIFFUSE_TRANSMISSION,
-            )
+        let c1 = l.spec_reflect;
+        let c2 = c1 + l.spec_trans;
+        let c3 = c2 + l.diff_reflect;
+        let (is_sr, is_st) = if has_st {
+            let is_sr = u1.less(c1);
+            (is_sr, !is_sr & u1.less(c2))
         } else {
-            return None;
+            (no, no)
         };
+        let is_dr = !is_sr & !is_st & u1.less(c3);
+        if self.diff_trans.is_none() {
+            valid &= is_sr | is_st | is_dr;
+        }
+        // The diffuse lobes: the cosine hemisphere, turned down for transmission.
+        let c = warp::square_to_cosine_hemisphere_r(u2);
+        let mut wo = Vector3::select(is_dr, c, -c);
+        let spec = is_sr | is_st;
+        if spec.any() {
+            // One visible normal, of the reflection or the transmission lobe's distribution.
+            let (m, pm) = self.distribution(&p, is_sr).sample(wi_f, u2);
+            let r = reflect_about_r(wi_f, m);
+            let t = Vector3::new(r.x, r.y, -r.z);
+            let r_ok = r.z.greater(zero) & mac_mic_compatible(m, wi_f, r, wi_f.z, true);
+            let t_ok = t.z.less(zero) & mac_mic_compatible(m, wi_f, t, wi_f.z, false);
+            let ok = pm.greater(zero) & ((is_sr & r_ok) | (!is_sr & t_ok));
+            wo = Vector3::select(spec, Vector3::select(is_sr, r, t), wo);
+            valid &= !spec | ok;
+        }
+        if !valid.any() {
+            return none;
+        }
         // Back to wi's side.
         let wo = mulsign(wo, cos_i).normalize();
-        let pdf = self.pdf(sp, wi, wo);
-        if pdf.is_nan() || pdf <= 0.0 {
-            return None;
+        let (value, pdf) = self.eval_pdf_r(sp, wi, wo);
+        valid &= pdf.greater(zero);
+        let weight = value.div(pdf);
+        (
+            BsdfSampleR {
+                wo,
+                weight,
+                pdf,
+                eta: R::one(),
+                valid: valid & weight.is_finite(),
+                delta: no,
+            },
+            ThinLobe {
+                spec_reflect: is_sr,
+                spec_trans: is_st,
+                diff_reflect: is_dr,
+            },
+        )
+    }
+}
+
+/// The lobe a sample came from (the other lanes took the diffuse transmission).
+struct ThinLobe<R: Real> {
+    spec_reflect: R::Mask,
+    spec_trans: R::Mask,
+    diff_reflect: R::Mask,
+}
+
+impl ThinLobe<f32> {
+    fn flags(&self) -> LobeFlags {
+        if self.spec_reflect {
+            LobeFlags::GLOSSY_REFLECTION
+        } else if self.spec_trans {
+            LobeFlags::GLOSSY_TRANSMISSION
+        } else if self.diff_reflect {
+            LobeFlags::DIFFUSE_REFLECTION
+        } else {
+            LobeFlags::DIFFUSE_TRANSMISSION
         }
-        let weight = self.eval(sp, wi, wo) / pdf;
-        weight.is_finite().then_some(BsdfSample {
-            wo,
-            weight,
-            pdf,
-            eta: 1.0,
-            lobe,
-        })
     }
 }
 

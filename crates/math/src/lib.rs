@@ -21,7 +21,13 @@ pub type Spectrum = Vec3;
 /// Rec. 709 luminance of a linear RGB triple (Mitsuba's `luminance()`).
 #[inline]
 pub fn luminance(c: Spectrum) -> f32 {
-    c.dot(Vec3::new(0.212671, 0.715160, 0.072169))
+    luminance_r(c.into())
+}
+
+/// [`luminance`] over any [`real::Real`].
+#[inline(always)]
+pub fn luminance_r<R: real::Real>(c: real::Vector3<R>) -> R {
+    c.dot(real::Vector3::splat(Vec3::new(0.212671, 0.715160, 0.072169)))
 }
 
 /// Largest component, as Mitsuba's `dr::max` of a spectrum (used by Russian roulette).
