@@ -184,8 +184,15 @@ pub(crate) fn random_lane_bsdf(rng: &mut Pcg32, depth: u32) -> Bsdf {
     }
 }
 
-/// Directions as [`random_direction`] makes them, and ones with exactly zero components.
+/// Directions as [`random_direction`] makes them, ones with exactly zero components, and
+/// rarely what a packet's idle lanes may hold (zero, NaN, infinite vectors).
 pub(crate) fn direction(rng: &mut Pcg32) -> Vec3 {
+    match rng.random_range(0..400) {
+        0..4 => return Vec3::ZERO,
+        4 | 5 => return Vec3::NAN,
+        6 => return Vec3::new(f32::INFINITY, 0.0, -f32::INFINITY),
+        _ => {}
+    }
     match rng.random_range(0..12) {
         0 => Vec3::new(0.0, 0.0, if rng.random() { 1.0 } else { -1.0 }),
         1 => Vec3::new(if rng.random() { 1.0 } else { -1.0 }, 0.0, 0.0),
@@ -229,7 +236,10 @@ fn lanes_are_the_one_path_bit_for_bit() {
             let (mut wi, mut wo) = ([Vec3::ZERO; 16], [Vec3::ZERO; 16]);
             let (mut u1, mut u2) = ([0.0f32; 16], [Vec2::ZERO; 16]);
             for k in 0..16 {
-                let uv = Vec2::new(rng.random_range(-1.0..2.0), rng.random_range(-1.0..2.0));
+                let uv = match rng.random_range(0..100) {
+                    0 => Vec2::NAN,
+                    _ => Vec2::new(rng.random_range(-1.0..2.0), rng.random_range(-1.0..2.0)),
+                };
                 sp[k] = ShadingPoint::at_uv(uv);
                 wi[k] = direction(&mut rng);
                 wo[k] = match rng.random_range(0..5) {

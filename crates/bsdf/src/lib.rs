@@ -50,6 +50,15 @@
 //! `perturbed.rs` (the shading-frame change `normalmap` and `bumpmap` share), [`Texture`]
 //! (`texture/`: constants, bitmaps, checkerboards), `principled_helpers.rs` (what
 //! `principled` and `principledthin` share, Mitsuba's `principledhelpers.h`).
+//!
+//! # One path or sixteen
+//! Most models are written once over [`radia_math::real::Real`] (`eval_pdf_r`, `sample_r`):
+//! `diffuse`, `conductor`, `roughconductor`, `dielectric`, `thindielectric`,
+//! `roughdielectric`, `plastic`, `roughplastic`, `phong`, `blinnphong`, `cooktorrance`, and
+//! `twosided` when both sides are among them ([`Bsdf::has_r`]). Their one-path `eval`, `pdf`,
+//! `eval_pdf` and `sample` are the `f32` instantiation; over `f32x16` each lane gets the same
+//! bits (`lanes_test.rs`). The others (`principled`, `principledthin`, `blendbsdf`,
+//! `normalmap`, `bumpmap`, `mask`, `null`) are one-path only.
 
 use glam::{Vec2, Vec3};
 use radia_math::real::{Mask as _, Real, Vector2, Vector3};

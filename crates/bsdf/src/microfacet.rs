@@ -20,7 +20,7 @@
 
 use crate::ShadingPointR;
 use glam::{Vec2, Vec3};
-use radia_math::real::{select_lazy, Mask, Real, Vector2, Vector3};
+use radia_math::real::{select_lazy, select_or_branch, Mask, Real, Vector2, Vector3};
 use radia_math::{trig, PI};
 use radia_sampling::warp;
 
@@ -385,9 +385,10 @@ impl<R: Real> MicrofacetDistributionR<R> {
         let (sin_phi, cos_phi) = sincos_phi(wi_p);
         let slope = self.sample_visible_11(wi_p.z, u);
         let (m, finite) = self.unstretch(sin_phi, cos_phi, slope);
-        let m = Vector3::select(finite, m, Vector3::splat(Vec3::Z));
+        // Almost always finite: for one path a branch, not a select on the chain to D(m).
+        let m = select_or_branch(finite, || m, || Vector3::splat(Vec3::Z));
         let pdf = self.eval(m) * self.visible_g1(wi, m) * wi.dot(m).abs() / wi.z;
-        (m, R::select(finite, pdf, R::zero()))
+        (m, select_or_branch(finite, || pdf, R::zero))
     }
 
     /// The normal of the α = 1 slopes `slope`, rotated to wi's azimuth (φ given by its sine
@@ -497,10 +498,10 @@ fn sincos_phi<R: Real>(v: Vector3<R>) -> (R, R) {
     let sin2 = v.x * v.x + v.y * v.y;
     let inv = R::one() / sin2.sqrt();
     let (one, zero) = (R::one(), R::zero());
-    let pole = sin2.less_eq(R::splat(4.0 * f32::EPSILON));
-    (
-        R::select(pole, zero, (v.y * inv).clamp(-one, one)),
-        R::select(pole, one, (v.x * inv).clamp(-one, one)),
+    select_or_branch(
+        sin2.less_eq(R::splat(4.0 * f32::EPSILON)),
+        || (zero, one),
+        || ((v.y * inv).clamp(-one, one), (v.x * inv).clamp(-one, one)),
     )
 }
 

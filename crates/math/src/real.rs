@@ -735,6 +735,27 @@ pub fn select_lazy<R: Real, T: Select<R>>(
     }
 }
 
+/// `select(m, if_true(), if_false())` as a branch for one path and a select (both sides,
+/// no branch) for lanes: for conditions that almost always go one way (a pole, a value
+/// that is not finite), where one path gains by speculating past the condition rather than
+/// waiting for it, and lanes lose by branching on masks.
+#[inline(always)]
+pub fn select_or_branch<R: Real, T: Select<R>>(
+    m: R::Mask,
+    if_true: impl FnOnce() -> T,
+    if_false: impl FnOnce() -> T,
+) -> T {
+    if R::LANES == 1 {
+        if m.any() {
+            if_true()
+        } else {
+            if_false()
+        }
+    } else {
+        T::select(m, if_true(), if_false())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
