@@ -105,10 +105,39 @@ pub(crate) fn random_principled_thin(rng: &mut Pcg32) -> Bsdf {
 /// One of the models this file tests, with random parameters; those that nest others
 /// (when `depth` > 0) nest any lane models.
 fn random_model(rng: &mut Pcg32, depth: u32) -> Bsdf {
-    let kinds = if depth > 0 { 3 } else { 2 };
+    let kinds = if depth > 0 { 5 } else { 2 };
+    let options = |rng: &mut Pcg32| PerturbOptions {
+        flip_invalid_normals: rng.random(),
+        use_shadowing_function: rng.random(),
+    };
     match rng.random_range(0..kinds) {
         0 => random_principled(rng),
         1 => random_principled_thin(rng),
+        2 => Bsdf::NormalMap(NormalMap::new(
+            // Any colour: mid-grey (a zero normal), pure axes, tilts.
+            random_texture(rng, |r| match r.random_range(0..4) {
+                0 => 0.5,
+                1 => 1.0,
+                _ => r.random(),
+            }),
+            random_nested(rng, depth - 1),
+            options(rng),
+        )),
+        3 => {
+            // Heights as bitmaps (bilinear: a gradient; nearest: none), constants, and
+            // checkerboards (no gradient at all: no frame).
+            let height = random_texture(rng, |r| r.random_range(-1.0..1.0));
+            let scale = match rng.random_range(0..4) {
+                0 => 0.0,
+                _ => log_uniform(rng, 1e-3, 1e3),
+            };
+            Bsdf::BumpMap(BumpMap::new(
+                height,
+                scale,
+                random_nested(rng, depth - 1),
+                options(rng),
+            ))
+        }
         _ => {
             let (first, second) = (random_nested(rng, depth - 1), random_nested(rng, depth - 1));
             Bsdf::Blend(if rng.random() {
@@ -285,8 +314,10 @@ fn compare(b: &Bsdf, rng: &mut Pcg32, counts: &mut Counts) {
                 "lobe {:?} of a model with {flags:?}\n{at}",
                 so.lobe
             );
-            // (Directions in the plane, as a refraction at grazing incidence, on neither.)
-            if !so.lobe.is_null() && wi[k].z * so.wo.z != 0.0 {
+            // (Directions in the plane, as a refraction at grazing incidence, on neither;
+            // under a normal or bump map the side is the perturbed frame's.)
+            let perturbed = b.reads_surface_frame();
+            if !so.lobe.is_null() && !perturbed && wi[k].z * so.wo.z != 0.0 {
                 let through = wi[k].z * so.wo.z < 0.0;
                 assert_eq!(
                     so.lobe.intersects(LobeFlags::TRANSMISSION),

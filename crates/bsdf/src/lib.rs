@@ -452,6 +452,8 @@ impl Bsdf {
             Bsdf::ThinDielectric(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::PrincipledThin(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::Blend(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::NormalMap(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::BumpMap(m) => m.eval_pdf(sp, wi, wo),
             _ => (self.eval(sp, wi, wo), self.pdf(sp, wi, wo)),
         }
     }
@@ -483,6 +485,8 @@ impl Bsdf {
     fn nested_has_r(&self) -> bool {
         match self {
             Bsdf::Blend(m) => m.bsdfs.iter().all(Bsdf::has_r),
+            Bsdf::NormalMap(m) => m.nested.has_r(),
+            Bsdf::BumpMap(m) => m.nested.has_r(),
             _ => false,
         }
     }
@@ -504,6 +508,8 @@ impl Bsdf {
             Bsdf::Principled(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::PrincipledThin(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::Blend(m) if self.has_r() => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::NormalMap(m) if self.has_r() => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::BumpMap(m) if self.has_r() => Some(m.eval_pdf_r(sp, wi, wo)),
             _ => None,
         }
     }
@@ -526,6 +532,8 @@ impl Bsdf {
             Bsdf::Principled(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::PrincipledThin(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::Blend(m) if self.has_r() => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::NormalMap(m) if self.has_r() => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::BumpMap(m) if self.has_r() => Some(m.sample_r(sp, wi, u1, u2)),
             _ => None,
         }
     }
