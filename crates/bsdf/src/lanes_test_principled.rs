@@ -105,7 +105,7 @@ pub(crate) fn random_principled_thin(rng: &mut Pcg32) -> Bsdf {
 /// One of the models this file tests, with random parameters; those that nest others
 /// (when `depth` > 0) nest any lane models.
 fn random_model(rng: &mut Pcg32, depth: u32) -> Bsdf {
-    let kinds = if depth > 0 { 5 } else { 2 };
+    let kinds = if depth > 0 { 7 } else { 3 };
     let options = |rng: &mut Pcg32| PerturbOptions {
         flip_invalid_normals: rng.random(),
         use_shadowing_function: rng.random(),
@@ -113,7 +113,16 @@ fn random_model(rng: &mut Pcg32, depth: u32) -> Bsdf {
     match rng.random_range(0..kinds) {
         0 => random_principled(rng),
         1 => random_principled_thin(rng),
-        2 => Bsdf::NormalMap(NormalMap::new(
+        2 => Bsdf::Null(Null),
+        3 => {
+            let opacity = random_texture(rng, random_weight);
+            let nested = random_nested(rng, depth - 1);
+            Bsdf::Mask(match rng.random_range(0..3) {
+                0 => Mask::with_cutoff(opacity, random_weight(rng), nested),
+                _ => Mask::new(opacity, nested),
+            })
+        }
+        4 => Bsdf::NormalMap(NormalMap::new(
             // Any colour: mid-grey (a zero normal), pure axes, tilts.
             random_texture(rng, |r| match r.random_range(0..4) {
                 0 => 0.5,
@@ -123,7 +132,7 @@ fn random_model(rng: &mut Pcg32, depth: u32) -> Bsdf {
             random_nested(rng, depth - 1),
             options(rng),
         )),
-        3 => {
+        5 => {
             // Heights as bitmaps (bilinear: a gradient; nearest: none), constants, and
             // checkerboards (no gradient at all: no frame).
             let height = random_texture(rng, |r| r.random_range(-1.0..1.0));
@@ -157,7 +166,7 @@ fn random_nested(rng: &mut Pcg32, depth: u32) -> Bsdf {
         } else {
             random_model(rng, depth)
         };
-        if b.has_r() {
+        if b.written_r() {
             return b;
         }
     }
@@ -204,6 +213,7 @@ struct Counts {
     smooth: usize,
     nonzero: usize,
     dense: usize,
+    null: usize,
 }
 
 /// Sixteen lanes of `b` at random points, directions and sample values against the `f32`
@@ -268,14 +278,16 @@ fn compare(b: &Bsdf, rng: &mut Pcg32, counts: &mut Counts) {
         }
         assert_eq!(valid, sk.valid, "sample validity\n{at}");
         if valid {
-            let delta = bit(s.delta);
+            let (delta, null) = (bit(s.delta), bit(s.null));
+            counts.null += null as usize;
             assert!(
                 same3(s.wo.lane(k), sk.wo.into())
                     && same3(s.weight.lane(k), sk.weight.into())
                     && same(s.pdf.lane(k), sk.pdf)
                     && same(s.eta.lane(k), sk.eta)
-                    && delta == sk.delta,
-                "sample: lanes ({}, {}, {}, {}, {delta}), f32 {sk:?}\n{at}",
+                    && delta == sk.delta
+                    && null == sk.null,
+                "sample: lanes ({}, {}, {}, {}, {delta}, {null}), f32 {sk:?}\n{at}",
                 s.wo.lane(k),
                 s.weight.lane(k),
                 s.pdf.lane(k),
@@ -305,7 +317,8 @@ fn compare(b: &Bsdf, rng: &mut Pcg32, counts: &mut Counts) {
                     && same3(so.weight, sk.weight.into())
                     && same(so.pdf, sk.pdf)
                     && same(so.eta, sk.eta)
-                    && so.lobe.is_delta() == sk.delta,
+                    && so.lobe.is_delta() == sk.delta
+                    && so.lobe.is_null() == sk.null,
                 "one-path sample {so:?}\n{at}"
             );
             // The lobe is one of the model's, on the side the direction went.
@@ -337,14 +350,19 @@ fn nested_and_principled_lanes_are_the_one_path_bit_for_bit() {
     let mut counts = Counts::default();
     for _ in 0..1500 {
         let b = random_model(&mut rng, 2);
-        assert!(b.has_r(), "{b:?}");
+        assert!(b.written_r(), "{b:?}");
+        // The packet loop runs them all but those with a null lobe.
+        assert_eq!(b.has_r(), !b.flags().is_null(), "{b:?}");
         for _ in 0..8 {
             compare(&b, &mut rng, &mut counts);
         }
     }
     let c = &counts;
     assert!(
-        c.sampled * 3 > c.lanes && c.nonzero * 3 > c.smooth && c.dense * 3 > c.smooth,
+        c.sampled * 3 > c.lanes
+            && c.nonzero * 3 > c.smooth
+            && c.dense * 3 > c.smooth
+            && c.null * 20 > c.sampled,
         "{c:?}"
     );
 }

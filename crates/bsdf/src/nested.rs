@@ -100,6 +100,7 @@ impl Nested<f32> for OnePath {
                     eta: s.eta,
                     valid: true,
                     delta: s.lobe.is_delta(),
+                    null: s.lobe.is_null(),
                 }
             }
             None => BsdfSampleR::none(),
@@ -152,6 +153,7 @@ impl<R: Real> Select<R> for BsdfSampleR<R> {
             eta: R::select(m, t.eta, f.eta),
             valid: select_mask(m, t.valid, f.valid),
             delta: select_mask(m, t.delta, f.delta),
+            null: select_mask(m, t.null, f.null),
         }
     }
 }
