@@ -8,6 +8,10 @@
 //! estimation. Every iteration makes N calls; divan's
 //! item counter reads as calls per second (Mitem/s = M calls/s).
 //!
+//! `eval_pdf_lanes` and `sample_lanes` make the same N calls sixteen lanes at a time through
+//! the models written over `Real` (`Bsdf::eval_pdf_r`, `Bsdf::sample_r` over `f32x16`), as
+//! the packet loop does; models without lane versions are skipped there.
+//!
 //! Run: `cargo bench -p radia-bsdf --bench bsdf` (quick: append `-- --sample-count 5`;
 //! one model: `-- roughplastic`).
 
@@ -16,6 +20,7 @@ use divan::{black_box, Bencher};
 use glam::{Vec2, Vec3};
 use radia_bsdf::ior::lookup_conductor;
 use radia_bsdf::microfacet::Shadowing;
+use radia_bsdf::ShadingPointR;
 use radia_bsdf::{
     Bitmap, BlinnPhong, Blend, Bsdf, BumpMap, Conductor, CookTorrance, CookTorranceFresnel,
     Diffuse, Dielectric, FilterType, Mask, MicrofacetDistribution, MicrofacetType, NormalMap,
@@ -23,6 +28,7 @@ use radia_bsdf::{
     RoughConductor, RoughDielectric, RoughPlastic, ShadingPoint, Texture, ThinDielectric,
     TwoSided, UvTransform, WrapMode,
 };
+use radia_math::real::{f32x16, Real, Vector2, Vector3};
 use radia_sampling::warp::square_to_cosine_hemisphere;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
@@ -70,9 +76,18 @@ struct Input {
 struct Case {
     bsdf: Bsdf,
     inputs: Vec<Input>,
+    /// The inputs by sixteen, in lanes.
+    lanes: Vec<LaneInput>,
     /// Where the model is queried: uv 0 with the shading frame's tangents and normal (what
     /// a bump map reads).
     sp: ShadingPoint,
+}
+
+struct LaneInput {
+    wi: Vector3<f32x16>,
+    u1: f32x16,
+    u2: Vector2<f32x16>,
+    wo: Vector3<f32x16>,
 }
 
 fn model(name: &str) -> (Bsdf, bool) {
@@ -268,7 +283,7 @@ static CASES: LazyLock<Vec<(&'static str, Case)>> = LazyLock::new(|| {
                     d
                 }
             };
-            let inputs = (0..N)
+            let inputs: Vec<Input> = (0..N)
                 .map(|_| Input {
                     wi: dir(&mut rng),
                     u1: rng.random(),
@@ -276,8 +291,25 @@ static CASES: LazyLock<Vec<(&'static str, Case)>> = LazyLock::new(|| {
                     wo: dir(&mut rng),
                 })
                 .collect();
+            let lanes = inputs
+                .chunks(16)
+                .map(|c| LaneInput {
+                    wi: Vector3::from_fn(|k| c[k].wi),
+                    u1: f32x16::from_fn(|k| c[k].u1),
+                    u2: Vector2::from_fn(|k| c[k].u2),
+                    wo: Vector3::from_fn(|k| c[k].wo),
+                })
+                .collect();
             let sp = ShadingPoint::at_uv(Vec2::ZERO);
-            (name, Case { bsdf, inputs, sp })
+            (
+                name,
+                Case {
+                    bsdf,
+                    inputs,
+                    lanes,
+                    sp,
+                },
+            )
         })
         .collect()
 });
@@ -312,4 +344,39 @@ fn eval(bencher: Bencher, name: &str) {
 #[divan::bench(args = MODELS)]
 fn eval_pdf(bencher: Bencher, name: &str) {
     run(bencher, name, |b, sp, x| b.eval_pdf(sp, x.wi, x.wo));
+}
+
+fn run_lanes<O>(
+    bencher: Bencher,
+    name: &str,
+    f: impl Fn(&Bsdf, &ShadingPointR<f32x16>, &LaneInput) -> O + Sync,
+) {
+    let c = case(name);
+    if !c.bsdf.has_r() {
+        return;
+    }
+    let sp = ShadingPointR::<f32x16> {
+        uv: Vector2::new(f32x16::ZERO, f32x16::ZERO),
+        dp_du: Vector3::splat(Vec3::X),
+        dp_dv: Vector3::splat(Vec3::Y),
+        n: Vector3::splat(Vec3::Z),
+    };
+    bencher.counter(ItemsCount::new(N)).bench(|| {
+        let bsdf = black_box(&c.bsdf);
+        for input in black_box(&c.lanes[..]) {
+            black_box(f(bsdf, &sp, input));
+        }
+    });
+}
+
+/// `Bsdf::eval_pdf_r` over sixteen lanes (items count single calls).
+#[divan::bench(args = MODELS)]
+fn eval_pdf_lanes(bencher: Bencher, name: &str) {
+    run_lanes(bencher, name, |b, sp, x| b.eval_pdf_r(sp, x.wi, x.wo));
+}
+
+/// `Bsdf::sample_r` over sixteen lanes (items count single calls).
+#[divan::bench(args = MODELS)]
+fn sample_lanes(bencher: Bencher, name: &str) {
+    run_lanes(bencher, name, |b, sp, x| b.sample_r(sp, x.wi, x.u1, x.u2));
 }

@@ -18,10 +18,12 @@
 //! the half vector from (n + 1)/(2π) cos^n θh and `wo` its mirror image of `wi`, whose
 //! density is that of h times the Jacobian 1/(4 wo·h) (Walter et al. 2007, eq. 14).
 
-use crate::fresnel::reflect_about;
-use crate::phong::{cos_power, power_cosine_pdf, square_to_power_cosine};
-use crate::{BsdfSample, LobeFlags, ShadingPoint, Texture};
+use crate::fresnel::reflect_about_r;
+use crate::phong::{cos_power_r, not_below, power_cosine_pdf_r, square_to_power_cosine_r};
+use crate::{mixture_lobe, mixture_sample_r, BsdfSample, BsdfSampleR, LobeFlags};
+use crate::{ShadingPoint, ShadingPointR, Texture};
 use glam::{Vec2, Vec3};
+use radia_math::real::{select_lazy, Mask, Real, Vector2, Vector3};
 use radia_math::{Spectrum, INV_PI};
 use radia_sampling::warp;
 
@@ -69,46 +71,103 @@ impl BlinnPhong {
 
     #[inline]
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
-        if wi.z <= 0.0 || wo.z <= 0.0 {
-            return Spectrum::ZERO;
-        }
-        let h = (wi + wo).normalize();
-        let spec = self.norm * cos_power(h.z, self.exponent);
-        (self.diffuse_reflectance.eval(sp) * INV_PI + self.specular_reflectance.eval(sp) * spec)
-            * wo.z
+        self.eval_r(&sp.into(), wi.into(), wo.into()).into()
     }
 
     #[inline]
     pub fn pdf(&self, _sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        if wi.z <= 0.0 || wo.z <= 0.0 {
-            return 0.0;
-        }
-        let ps = self.specular_probability();
-        let h = (wi + wo).normalize();
-        let spec = power_cosine_pdf(h.z, self.exponent) / (4.0 * wo.dot(h));
-        let spec = if spec.is_finite() { spec } else { 0.0 };
-        (1.0 - ps) * warp::cosine_hemisphere_pdf(wo) + ps * spec
+        self.pdf_r(wi.into(), wo.into())
+    }
+
+    #[inline]
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let (f, pdf) = self.eval_pdf_r(&sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
     }
 
     #[inline]
     pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
-        if wi.z <= 0.0 {
-            return None;
+        let (s, specular) = self.sample_lobe(&sp.into(), wi.into(), u1, u2.into());
+        s.one_path(mixture_lobe(specular))
+    }
+
+    #[inline(always)]
+    fn eval_r<R: Real>(&self, sp: &ShadingPointR<R>, wi: Vector3<R>, wo: Vector3<R>) -> Vector3<R> {
+        let ok = not_below(wi, wo);
+        if !ok.any() {
+            return Vector3::zero();
         }
-        let specular = u1 < self.specular_probability();
-        let wo = if specular {
-            let h = square_to_power_cosine(u2, self.exponent);
-            // A half vector facing away from wi mirrors wi below the microfacet: such wo
-            // have the opposite half vector, where the density is zero.
-            if wi.dot(h) <= 0.0 {
-                return None;
-            }
-            reflect_about(wi, h)
-        } else {
-            warp::square_to_cosine_hemisphere(u2)
-        };
-        let pdf = self.pdf(sp, wi, wo);
-        crate::mixture_sample(wo, specular, pdf, || self.eval(sp, wi, wo))
+        let h = (wi + wo).normalize();
+        let spec = R::splat(self.norm) * cos_power_r(h.z, R::splat(self.exponent));
+        let f = (self.diffuse_reflectance.eval_r(sp) * R::splat(INV_PI)
+            + self.specular_reflectance.eval_r(sp) * spec)
+            * wo.z;
+        Vector3::select(ok, f, Vector3::zero())
+    }
+
+    #[inline(always)]
+    fn pdf_r<R: Real>(&self, wi: Vector3<R>, wo: Vector3<R>) -> R {
+        let ok = not_below(wi, wo);
+        if !ok.any() {
+            return R::zero();
+        }
+        let ps = R::splat(self.specular_probability());
+        let h = (wi + wo).normalize();
+        let spec = power_cosine_pdf_r(h.z, R::splat(self.exponent)) / (R::splat(4.0) * wo.dot(h));
+        let spec = R::select(spec.is_finite(), spec, R::zero());
+        let p = (R::one() - ps) * warp::cosine_hemisphere_pdf_r(wo) + ps * spec;
+        R::select(ok, p, R::zero())
+    }
+
+    /// eval and pdf over any [`Real`].
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        (self.eval_r(sp, wi, wo), self.pdf_r(wi, wo))
+    }
+
+    /// sample over any [`Real`].
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        self.sample_lobe(sp, wi, u1, u2).0
+    }
+
+    /// The sample and the lanes that took the specular lobe (a half vector from the cos^n
+    /// lobe, `wi` mirrored about it; else the cosine).
+    #[inline(always)]
+    fn sample_lobe<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> (BsdfSampleR<R>, R::Mask) {
+        let zero = R::zero();
+        let specular = u1.less(R::splat(self.specular_probability()));
+        // A half vector facing away from wi mirrors wi below the microfacet: such wo have
+        // the opposite half vector, where the density is zero (`facing` false).
+        let (wo, facing) = select_lazy(
+            specular,
+            || {
+                let h = square_to_power_cosine_r(u2, R::splat(self.exponent));
+                (reflect_about_r(wi, h), wi.dot(h))
+            },
+            || (warp::square_to_cosine_hemisphere_r(u2), R::one()),
+        );
+        let valid = !wi.z.less_eq(zero) & !facing.less_eq(zero);
+        let pdf = self.pdf_r(wi, wo);
+        let s = mixture_sample_r(wo, pdf, valid, || self.eval_r(sp, wi, wo));
+        (s, specular)
     }
 }
 

@@ -39,15 +39,19 @@
 //! the base through the specular albedo, Kelemen and Szirmay-Kalos 2001, which conserves
 //! energy but renders a different image). The base is sampled by the cosine, the specular
 //! lobe by visible normals, with probabilities in proportion to the Fresnel reflectance
-//! and the base's weight at cos θi.
+//! and the base's weight at cos θi. Written once over [`Real`] (`eval_pdf_r`, `sample_r`)
+//! for one path or a packet's lanes.
 
-use crate::fresnel::{fresnel_schlick, fresnel_schlick_1};
-use crate::microfacet::{MicrofacetDistribution, Shadowing};
+use crate::fresnel::{fresnel_schlick_1_r, fresnel_schlick_r};
+use crate::microfacet::{MicrofacetDistribution, MicrofacetDistributionR, Shadowing, MIN_ALPHA};
 use crate::rough_conductor::{
-    microfacet_reflection, microfacet_reflection_pdf, sample_microfacet_reflection,
+    microfacet_reflection_pdf_r, microfacet_reflection_r, sample_microfacet_reflection_r,
+    HalfVector,
 };
-use crate::{mean, BsdfSample, LobeFlags, ShadingPoint, Texture};
+use crate::{mixture_lobe, mixture_sample_r, BsdfSample, BsdfSampleR, LobeFlags};
+use crate::{ShadingPoint, ShadingPointR, Texture};
 use glam::{Vec2, Vec3};
+use radia_math::real::{select_lazy, Mask, Real, Select, Vector2, Vector3};
 use radia_math::{Spectrum, INV_PI};
 use radia_sampling::warp;
 
@@ -78,11 +82,11 @@ pub struct CookTorrance {
     roughness: Option<Box<Texture>>,
 }
 
-/// What the model is at one shading point.
-struct Params {
-    f0: Spectrum,
+/// What the model is at a shading point (one per lane).
+struct Params<R> {
+    f0: Vector3<R>,
     /// (1 − metallic) · base_color; zero for the Schlick-only form.
-    diffuse: Spectrum,
+    diffuse: Vector3<R>,
 }
 
 impl CookTorrance {
@@ -151,145 +155,235 @@ impl CookTorrance {
     }
 
     /// The distribution at `sp` (a copy without a roughness texture: one branch).
-    #[inline]
-    fn distribution_at(&self, sp: &ShadingPoint) -> MicrofacetDistribution {
+    #[inline(always)]
+    fn distribution_at<R: Real>(&self, sp: &ShadingPointR<R>) -> MicrofacetDistributionR<R> {
         match &self.roughness {
-            None => self.distribution,
+            None => self.distribution.splat(),
             Some(t) => {
-                let r = t.eval_1(sp);
-                let r = if r >= 0.0 { r.min(1.0) } else { 0.0 };
-                MicrofacetDistribution::new(
-                    self.distribution.kind,
-                    r * r,
-                    r * r,
-                    self.distribution.sample_visible,
-                )
+                let r = t.eval_1_r(sp);
+                let r = R::select(r.greater_eq(R::zero()), r.min(R::one()), R::zero());
+                let alpha = (r * r).max(R::splat(MIN_ALPHA));
+                MicrofacetDistributionR {
+                    alpha_u: alpha,
+                    alpha_v: alpha,
+                    ..self.distribution.splat()
+                }
             }
         }
     }
 
-    #[inline]
-    fn params(&self, sp: &ShadingPoint) -> Params {
+    #[inline(always)]
+    fn params<R: Real>(&self, sp: &ShadingPointR<R>) -> Params<R> {
         match &self.fresnel {
             CookTorranceFresnel::Schlick { f0 } => Params {
-                f0: f0.eval(sp),
-                diffuse: Spectrum::ZERO,
+                f0: f0.eval_r(sp),
+                diffuse: Vector3::zero(),
             },
             CookTorranceFresnel::MetallicRoughness {
                 base_color,
                 metallic,
             } => {
-                let base = base_color.eval(sp);
+                let base = base_color.eval_r(sp);
                 let m = match metallic {
-                    Texture::Constant(c) => c.x,
-                    t => clamp_metallic(t.eval_1(sp)),
+                    Texture::Constant(c) => R::splat(c.x),
+                    t => clamp_metallic(t.eval_1_r(sp)),
                 };
+                let dielectric = Vector3::splat(Spectrum::splat(GLTF_DIELECTRIC_F0));
                 Params {
-                    f0: Spectrum::splat(GLTF_DIELECTRIC_F0) * (1.0 - m) + base * m,
-                    diffuse: base * (1.0 - m),
+                    f0: dielectric * (R::one() - m) + base * m,
+                    diffuse: base * (R::one() - m),
                 }
             }
         }
     }
 
     /// Probability of sampling the specular lobe at `wi`.
-    #[inline]
-    fn specular_probability(&self, p: &Params, wi: Vec3) -> f32 {
+    #[inline(always)]
+    fn specular_probability<R: Real>(&self, p: &Params<R>, wi: Vector3<R>) -> R {
+        let one = R::one();
         if !self.has_base {
-            return 1.0;
+            return one;
         }
-        let ws = mean(fresnel_schlick(wi.z, p.f0));
-        let wd = mean(p.diffuse) * (1.0 - fresnel_schlick_1(wi.z, GLTF_DIELECTRIC_F0));
-        if ws + wd > 0.0 {
-            ws / (ws + wd)
-        } else {
-            1.0
-        }
+        let ws = mean(fresnel_schlick_r(wi.z, p.f0));
+        let wd = mean(p.diffuse) * (one - fresnel_schlick_1_r(wi.z, R::splat(GLTF_DIELECTRIC_F0)));
+        R::select((ws + wd).greater(R::zero()), ws / (ws + wd), one)
     }
 
     #[inline]
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
-        if !(wi.z > 0.0 && wo.z > 0.0) {
-            return Spectrum::ZERO;
-        }
-        let d = self.distribution_at(sp);
-        let p = self.params(sp);
-        let mut f = Spectrum::ZERO;
-        if let Some((v, h)) = microfacet_reflection(&d, self.shadowing, wi, wo) {
-            f += fresnel_schlick(wi.dot(h), p.f0) * v;
-        }
-        if self.has_base {
-            // Appendix B's fresnel_mix: the base weighted by 1 − F(V·H), F0 = 0.04.
-            let h = (wi + wo).normalize();
-            let weight = 1.0 - fresnel_schlick_1(wi.dot(h), GLTF_DIELECTRIC_F0);
-            f += p.diffuse * (weight * INV_PI * wo.z);
-        }
-        f
+        let sp = sp.into();
+        self.eval_pdf_at(&sp, wi.into(), wo.into(), true, false)
+            .0
+            .into()
     }
 
     #[inline]
     pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        if !(wi.z > 0.0 && wo.z > 0.0) {
-            return 0.0;
-        }
-        let d = self.distribution_at(sp);
-        let p = self.params(sp);
-        self.pdf_with(&d, &p, wi, wo)
+        let sp = sp.into();
+        self.eval_pdf_at(&sp, wi.into(), wo.into(), false, true).1
     }
 
     #[inline]
-    fn pdf_with(&self, d: &MicrofacetDistribution, p: &Params, wi: Vec3, wo: Vec3) -> f32 {
-        let ps = self.specular_probability(p, wi);
-        let mut pdf = ps * microfacet_reflection_pdf(d, wi, wo);
-        if ps < 1.0 {
-            pdf += (1.0 - ps) * warp::cosine_hemisphere_pdf(wo);
-        }
-        pdf
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let (f, pdf) = self.eval_pdf_r(&sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
     }
 
     #[inline]
     pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
-        if !(wi.z > 0.0) {
-            return None;
+        let (s, glossy) = self.sample_lobe(&sp.into(), wi.into(), u1, u2.into());
+        s.one_path(mixture_lobe(glossy))
+    }
+
+    /// eval (if `value`) and pdf (if `density`; each zero otherwise) with the distribution
+    /// `d` and parameters `p` at `sp`, zero unless wi and wo are above the surface.
+    #[inline(always)]
+    fn eval_pdf_with<R: Real>(
+        &self,
+        d: &MicrofacetDistributionR<R>,
+        p: &Params<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+        value: bool,
+        density: bool,
+    ) -> (Vector3<R>, R) {
+        let (zero, one) = (R::zero(), R::one());
+        let Some(hv) = HalfVector::new(d, wi, wo) else {
+            return (Vector3::zero(), zero);
+        };
+        let mut f = Vector3::zero();
+        if value {
+            let (v, ok) = microfacet_reflection_r(d, self.shadowing, wi, wo, &hv);
+            let specular = fresnel_schlick_r(wi.dot(hv.h), p.f0) * v;
+            f = Vector3::select(ok, specular, Vector3::zero());
+            if self.has_base {
+                // Appendix B's fresnel_mix: the base weighted by 1 − F(V·H), F0 = 0.04.
+                let dielectric = R::splat(GLTF_DIELECTRIC_F0);
+                let weight = one - fresnel_schlick_1_r(wi.dot(hv.h), dielectric);
+                f += p.diffuse * (weight * R::splat(INV_PI) * wo.z);
+            }
+        }
+        let mut pdf = zero;
+        if density {
+            let ps = self.specular_probability(p, wi);
+            let cosine = (one - ps) * warp::cosine_hemisphere_pdf_r(wo);
+            pdf = ps * microfacet_reflection_pdf_r(d, wi, wo, &hv)
+                + R::select(ps.less(one), cosine, zero);
+        }
+        (
+            Vector3::select(hv.above, f, Vector3::zero()),
+            R::select(hv.above, pdf, zero),
+        )
+    }
+
+    /// [`CookTorrance::eval_pdf_with`] at `sp`.
+    #[inline(always)]
+    fn eval_pdf_at<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+        value: bool,
+        density: bool,
+    ) -> (Vector3<R>, R) {
+        let zero = R::zero();
+        if !(wi.z.greater(zero) & wo.z.greater(zero)).any() {
+            return (Vector3::zero(), zero);
+        }
+        let (d, p) = (self.distribution_at(sp), self.params(sp));
+        self.eval_pdf_with(&d, &p, wi, wo, value, density)
+    }
+
+    /// eval and pdf over any [`Real`].
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        self.eval_pdf_at(sp, wi, wo, true, true)
+    }
+
+    /// sample over any [`Real`].
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        self.sample_lobe(sp, wi, u1, u2).0
+    }
+
+    /// The sample and the lanes of a glossy one. Where the specular lobe is certain (no
+    /// base, or none at `wi`) the rough conductor's closed-form weight; elsewhere a mixture
+    /// sample of visible normals and the cosine, weighted by eval/pdf.
+    #[inline(always)]
+    fn sample_lobe<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> (BsdfSampleR<R>, R::Mask) {
+        let (zero, one) = (R::zero(), R::one());
+        let valid = wi.z.greater(zero);
+        if !valid.any() {
+            return (BsdfSampleR::none(), R::Mask::splat(false));
         }
         let d = self.distribution_at(sp);
         let p = self.params(sp);
         let ps = self.specular_probability(&p, wi);
-        if ps >= 1.0 {
-            // Specular only: the weight in closed form, as the rough conductor's.
-            let s = sample_microfacet_reflection(&d, self.shadowing, wi, u2)?;
-            return Some(BsdfSample {
-                wo: s.wo.into(),
-                weight: fresnel_schlick(wi.dot(s.m.into()), p.f0) * s.weight,
-                pdf: s.pdf,
-                eta: 1.0,
-                lobe: LobeFlags::GLOSSY_REFLECTION,
-            });
-        }
-        let specular = u1 < ps;
-        let wo = if specular {
-            sample_microfacet_reflection(&d, self.shadowing, wi, u2)?
-                .wo
-                .into()
-        } else {
-            warp::square_to_cosine_hemisphere(u2)
+        let closed = ps.greater_eq(one);
+        let specular = u1.less(ps);
+        let glossy = closed | specular;
+        // One microfacet sample serves both (the same wi and u2).
+        let ms = glossy
+            .any()
+            .then(|| sample_microfacet_reflection_r(&d, self.shadowing, wi, u2));
+        let closed_form = match &ms {
+            Some(ms) if closed.any() => BsdfSampleR {
+                wo: ms.wo,
+                weight: fresnel_schlick_r(wi.dot(ms.m), p.f0) * ms.weight,
+                pdf: ms.pdf,
+                eta: one,
+                valid: valid & ms.valid,
+                delta: R::Mask::splat(false),
+                null: R::Mask::splat(false),
+            },
+            _ => BsdfSampleR::none(),
         };
-        if !(wo.z > 0.0) {
-            return None;
+        if closed.all() {
+            return (closed_form, glossy);
         }
-        let pdf = self.pdf_with(&d, &p, wi, wo);
-        crate::mixture_sample(wo, specular, pdf, || self.eval(sp, wi, wo))
+        let (ms_wo, ms_valid) = match &ms {
+            Some(ms) => (ms.wo, ms.valid),
+            None => (Vector3::zero(), R::Mask::splat(false)),
+        };
+        let wo = select_lazy(
+            specular,
+            || ms_wo,
+            || warp::square_to_cosine_hemisphere_r(u2),
+        );
+        let mixture_valid = valid & (!specular | ms_valid) & wo.z.greater(zero);
+        let (f, pdf) = self.eval_pdf_with(&d, &p, wi, wo, true, true);
+        let mixture = mixture_sample_r(wo, pdf, mixture_valid, || f);
+        (Select::select(closed, closed_form, mixture), glossy)
     }
 }
 
+/// Mean of the three channels (Mitsuba's `Texture::mean()` of an RGB constant).
+#[inline(always)]
+fn mean<R: Real>(c: Vector3<R>) -> R {
+    (c.x + c.y + c.z) * R::splat(1.0 / 3.0)
+}
+
 /// metallic in [0, 1] (NaN: 0).
-#[inline]
-fn clamp_metallic(m: f32) -> f32 {
-    if m >= 0.0 {
-        m.min(1.0)
-    } else {
-        0.0
-    }
+#[inline(always)]
+fn clamp_metallic<R: Real>(m: R) -> R {
+    R::select(m.greater_eq(R::zero()), m.min(R::one()), R::zero())
 }
 
 #[cfg(test)]

@@ -113,17 +113,33 @@ fn fresnel_conductor_1<R: Real>(cos_theta_i: R, eta_r: R, eta_i: R) -> R {
 /// for Physically-based Rendering", 1994), as glTF 2.0's metallic-roughness model uses it.
 #[inline]
 pub fn fresnel_schlick(cos_theta: f32, f0: Spectrum) -> Spectrum {
-    let m = (1.0 - cos_theta).clamp(0.0, 1.0);
-    let m2 = m * m;
-    f0 + (Spectrum::ONE - f0) * (m2 * m2 * m)
+    fresnel_schlick_r(cos_theta, f0.into()).into()
+}
+
+/// [`fresnel_schlick`] over any [`Real`].
+#[inline(always)]
+pub fn fresnel_schlick_r<R: Real>(cos_theta: R, f0: Vector3<R>) -> Vector3<R> {
+    f0 + (Vector3::splat(Spectrum::ONE) - f0) * schlick_weight(cos_theta)
 }
 
 /// Scalar [`fresnel_schlick`].
 #[inline]
 pub fn fresnel_schlick_1(cos_theta: f32, f0: f32) -> f32 {
-    let m = (1.0 - cos_theta).clamp(0.0, 1.0);
+    fresnel_schlick_1_r(cos_theta, f0)
+}
+
+/// [`fresnel_schlick_1`] over any [`Real`].
+#[inline(always)]
+pub fn fresnel_schlick_1_r<R: Real>(cos_theta: R, f0: R) -> R {
+    f0 + (R::one() - f0) * schlick_weight(cos_theta)
+}
+
+/// (1 − cos θ)⁵, with 1 − cos θ clamped to [0, 1].
+#[inline(always)]
+fn schlick_weight<R: Real>(cos_theta: R) -> R {
+    let m = (R::one() - cos_theta).clamp(R::zero(), R::one());
     let m2 = m * m;
-    f0 + (1.0 - f0) * (m2 * m2 * m)
+    m2 * m2 * m
 }
 
 /// The diffuse Fresnel reflectance Fdr of a dielectric with relative IOR `eta` (the fraction

@@ -67,9 +67,19 @@ pub(crate) fn random_eta(rng: &mut Pcg32) -> (f32, f32) {
 
 /// [`random_bsdf`]'s models, and each lane model with parameters at their extremes:
 /// textured and anisotropic roughness, IORs next to 1, textured reflectances.
-pub(crate) fn random_lane_bsdf(rng: &mut Pcg32) -> Bsdf {
+pub(crate) fn random_lane_bsdf(rng: &mut Pcg32, depth: u32) -> Bsdf {
     if rng.random() {
-        return random_bsdf(rng, 2);
+        return random_bsdf(rng, depth);
+    }
+    if depth > 0 && rng.random_range(0..8) == 0 {
+        // Two sides from this generator, reflective ones as the loader allows.
+        let mut side = || loop {
+            let b = random_lane_bsdf(rng, depth - 1);
+            if b.has_r() && !b.flags().intersects(LobeFlags::TRANSMISSION) {
+                return b;
+            }
+        };
+        return Bsdf::TwoSided(TwoSided::new(side(), side()));
     }
     let kind = if rng.random() {
         MicrofacetType::Beckmann
@@ -101,7 +111,54 @@ pub(crate) fn random_lane_bsdf(rng: &mut Pcg32) -> Bsdf {
     let presets = crate::ior::CONDUCTOR_PRESETS;
     let preset = presets[rng.random_range(0..presets.len())];
     let (int_ior, ext_ior) = random_eta(rng);
-    match rng.random_range(0..4) {
+    let exponent = match rng.random_range(0..4) {
+        0 => 0.0,
+        1 => 1e5,
+        _ => log_uniform(rng, 1e-3, 1e4),
+    };
+    match rng.random_range(0..10) {
+        7 => Bsdf::Phong(Phong::new(color(rng), color(rng), exponent)),
+        8 => Bsdf::BlinnPhong(BlinnPhong::new(color(rng), color(rng), exponent)),
+        9 => {
+            let fresnel = if rng.random() {
+                CookTorranceFresnel::Schlick { f0: color(rng) }
+            } else {
+                CookTorranceFresnel::MetallicRoughness {
+                    base_color: color(rng),
+                    metallic: random_texture(rng, |r| r.random_range(-0.1..1.1)),
+                }
+            };
+            let m = CookTorrance::new(dist, shadowing, fresnel);
+            Bsdf::CookTorrance(if rng.random() {
+                m.with_roughness_texture(random_texture(rng, |r| r.random_range(-0.1..1.1)))
+            } else {
+                m
+            })
+        }
+        // Its tables take 10⁶ normals to build: rarer.
+        6 if rng.random_range(0..3) == 0 => Bsdf::RoughPlastic(RoughPlastic::new(
+            kind,
+            au,
+            rng.random(),
+            int_ior,
+            ext_ior,
+            color(rng),
+            color(rng),
+            rng.random(),
+        )),
+        5 => Bsdf::Plastic(Plastic::new(
+            int_ior,
+            ext_ior,
+            color(rng),
+            color(rng),
+            rng.random(),
+        )),
+        4 => {
+            let mut m = RoughDielectric::new(dist, int_ior, ext_ior).with_roughness(roughness);
+            m.specular_reflectance = color(rng);
+            m.specular_transmittance = color(rng);
+            Bsdf::RoughDielectric(m)
+        }
         0 => Bsdf::RoughConductor(
             RoughConductor::new(dist, preset.eta.into(), preset.k.into(), color(rng))
                 .with_roughness(roughness)
@@ -152,16 +209,21 @@ pub(crate) fn same3(a: Vec3, b: Vec3) -> bool {
 fn lanes_are_the_one_path_bit_for_bit() {
     let mut rng = Pcg32::seed_from_u64(0x1a9e5);
     let mut models = 0;
+    let mut kinds = std::collections::BTreeMap::<String, usize>::new();
     // How often the comparisons had something to compare: lanes with a sample, with a
     // nonzero value, with a positive density.
     let (mut lanes, mut sampled) = (0usize, 0usize);
     let (mut smooth, mut nonzero, mut dense) = (0usize, 0usize, 0usize);
     while models < 600 {
-        let b = random_lane_bsdf(&mut rng);
+        let b = random_lane_bsdf(&mut rng, 2);
         if !b.has_r() {
             continue;
         }
         models += 1;
+        let kind = format!("{b:?}");
+        *kinds
+            .entry(kind[..kind.find('(').unwrap_or(kind.len())].to_string())
+            .or_insert(0) += 1;
         for _ in 0..8 {
             let mut sp = [ShadingPoint::default(); 16];
             let (mut wi, mut wo) = ([Vec3::ZERO; 16], [Vec3::ZERO; 16]);
@@ -266,6 +328,24 @@ fn lanes_are_the_one_path_bit_for_bit() {
                 }
             }
         }
+    }
+    println!("{models} models: {kinds:?}; {lanes} lanes, {sampled} sampled");
+    // Every lane model was drawn, many times.
+    for kind in [
+        "Diffuse",
+        "Conductor",
+        "RoughConductor",
+        "Dielectric",
+        "ThinDielectric",
+        "RoughDielectric",
+        "Plastic",
+        "RoughPlastic",
+        "TwoSided",
+        "Phong",
+        "BlinnPhong",
+        "CookTorrance",
+    ] {
+        assert!(kinds.get(kind).copied().unwrap_or(0) >= 10, "{kinds:?}");
     }
     // Not a vacuous pass: many lanes sample and evaluate to something (directions below
     // one-sided models and mirror pairs give nothing).

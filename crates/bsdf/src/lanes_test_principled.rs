@@ -162,7 +162,7 @@ fn random_model(rng: &mut Pcg32, depth: u32) -> Bsdf {
 fn random_nested(rng: &mut Pcg32, depth: u32) -> Bsdf {
     loop {
         let b = if rng.random() {
-            random_lane_bsdf(rng)
+            random_lane_bsdf(rng, 2)
         } else {
             random_model(rng, depth)
         };
@@ -327,10 +327,13 @@ fn compare(b: &Bsdf, rng: &mut Pcg32, counts: &mut Counts) {
                 "lobe {:?} of a model with {flags:?}\n{at}",
                 so.lobe
             );
-            // (Directions in the plane, as a refraction at grazing incidence, on neither;
-            // under a normal or bump map the side is the perturbed frame's.)
+            // (Directions in the plane, as a refraction at grazing incidence, on neither; and
+            // within round-off of it: a rough dielectric of IOR exactly 1 refracts
+            // wi = (0.336, 0.942, 8e-6) to z = +9e-5, the cancellation in `refract_about`,
+            // arithmetic the one-path model had before the lane port too. Under a normal or
+            // bump map the side is the perturbed frame's.)
             let perturbed = b.reads_surface_frame();
-            if !so.lobe.is_null() && !perturbed && wi[k].z * so.wo.z != 0.0 {
+            if !so.lobe.is_null() && !perturbed && wi[k].z.abs() > 1e-3 && so.wo.z.abs() > 1e-3 {
                 let through = wi[k].z * so.wo.z < 0.0;
                 assert_eq!(
                     so.lobe.intersects(LobeFlags::TRANSMISSION),
@@ -375,7 +378,7 @@ fn first_lane_models_at_full_shading_points() {
     let mut counts = Counts::default();
     let mut models = 0;
     while models < 300 {
-        let b = random_lane_bsdf(&mut rng);
+        let b = random_lane_bsdf(&mut rng, 2);
         if !b.has_r() {
             continue;
         }

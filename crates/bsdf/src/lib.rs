@@ -271,6 +271,22 @@ impl<R: Real> BsdfSampleR<R> {
     }
 }
 
+/// Lane by lane, the sample of `if_true` or of `if_false` (masks included).
+impl<R: Real> radia_math::real::Select<R> for BsdfSampleR<R> {
+    #[inline(always)]
+    fn select(m: R::Mask, if_true: Self, if_false: Self) -> Self {
+        Self {
+            wo: Vector3::select(m, if_true.wo, if_false.wo),
+            weight: Vector3::select(m, if_true.weight, if_false.weight),
+            pdf: R::select(m, if_true.pdf, if_false.pdf),
+            eta: R::select(m, if_true.eta, if_false.eta),
+            valid: (m & if_true.valid) | (!m & if_false.valid),
+            delta: (m & if_true.delta) | (!m & if_false.delta),
+            null: (m & if_true.null) | (!m & if_false.null),
+        }
+    }
+}
+
 impl BsdfSampleR<f32> {
     /// The one-path record: `Some` where the sample is valid, from the lobe the model says
     /// it chose.
@@ -454,13 +470,19 @@ impl Bsdf {
             Bsdf::Conductor(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::Dielectric(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::ThinDielectric(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::RoughDielectric(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::Plastic(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::RoughPlastic(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::TwoSided(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::Phong(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::BlinnPhong(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::CookTorrance(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::PrincipledThin(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::Blend(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::NormalMap(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::BumpMap(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::Mask(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::Null(m) => m.eval_pdf(sp, wi, wo),
-            _ => (self.eval(sp, wi, wo), self.pdf(sp, wi, wo)),
         }
     }
 }
@@ -476,6 +498,9 @@ impl Bsdf {
     /// does not follow yet. A model that nests others has lanes if its nested models do.
     #[inline]
     pub fn has_r(&self) -> bool {
+        if let Bsdf::TwoSided(m) = self {
+            return m.has_r();
+        }
         matches!(
             self,
             Bsdf::Diffuse(_)
@@ -483,6 +508,12 @@ impl Bsdf {
                 | Bsdf::RoughConductor(_)
                 | Bsdf::Dielectric(_)
                 | Bsdf::ThinDielectric(_)
+                | Bsdf::RoughDielectric(_)
+                | Bsdf::Plastic(_)
+                | Bsdf::RoughPlastic(_)
+                | Bsdf::Phong(_)
+                | Bsdf::BlinnPhong(_)
+                | Bsdf::CookTorrance(_)
                 | Bsdf::Principled(_)
                 | Bsdf::PrincipledThin(_)
         ) || self.nested_has_r()
@@ -528,6 +559,13 @@ impl Bsdf {
             Bsdf::RoughConductor(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::Dielectric(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::ThinDielectric(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::RoughDielectric(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::Plastic(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::RoughPlastic(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::Phong(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::BlinnPhong(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::CookTorrance(m) => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::TwoSided(m) => m.eval_pdf_r(sp, wi, wo),
             Bsdf::Principled(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::PrincipledThin(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::Blend(m) if self.written_r() => Some(m.eval_pdf_r(sp, wi, wo)),
@@ -554,6 +592,13 @@ impl Bsdf {
             Bsdf::RoughConductor(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::Dielectric(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::ThinDielectric(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::RoughDielectric(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::Plastic(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::RoughPlastic(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::Phong(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::BlinnPhong(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::CookTorrance(m) => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::TwoSided(m) => m.sample_r(sp, wi, u1, u2),
             Bsdf::Principled(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::PrincipledThin(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::Blend(m) if self.written_r() => Some(m.sample_r(sp, wi, u1, u2)),
@@ -566,35 +611,44 @@ impl Bsdf {
     }
 }
 
-/// Mean of the three channels: Mitsuba's `Texture::mean()` of an RGB constant, used for lobe
-/// sampling weights.
 /// The sample record of a model that mixes a cosine-sampled diffuse lobe with one glossy
-/// lobe (Phong, Blinn-Phong, Cook-Torrance): `wo` came from the glossy lobe when `glossy`;
-/// `pdf` is the whole mixture's density of `wo` and `value` its `eval`. `None` when the
-/// density is zero or not finite.
-#[inline]
-pub(crate) fn mixture_sample(
-    wo: Vec3,
-    glossy: bool,
-    pdf: f32,
-    value: impl FnOnce() -> Spectrum,
-) -> Option<BsdfSample> {
-    if !(pdf > 0.0) || !pdf.is_finite() {
-        return None;
+/// lobe (Phong, Blinn-Phong, Cook-Torrance) over any [`Real`]: `wo` came from the glossy
+/// lobe in the lanes of `glossy`; `pdf` is the whole mixture's density of `wo` and `value`
+/// its `eval`. Valid where `valid` and the density is positive and finite.
+#[inline(always)]
+pub(crate) fn mixture_sample_r<R: Real>(
+    wo: Vector3<R>,
+    pdf: R,
+    valid: R::Mask,
+    value: impl FnOnce() -> Vector3<R>,
+) -> BsdfSampleR<R> {
+    let valid = valid & pdf.greater(R::zero()) & pdf.is_finite();
+    if !valid.any() {
+        return BsdfSampleR::none();
     }
-    Some(BsdfSample {
+    BsdfSampleR {
         wo,
-        weight: value() / pdf,
+        weight: value().div(pdf),
         pdf,
-        eta: 1.0,
-        lobe: if glossy {
-            LobeFlags::GLOSSY_REFLECTION
-        } else {
-            LobeFlags::DIFFUSE_REFLECTION
-        },
-    })
+        eta: R::one(),
+        valid,
+        delta: R::Mask::splat(false),
+        null: R::Mask::splat(false),
+    }
 }
 
+/// The lobe flags of a [`mixture_sample_r`] for one path.
+#[inline(always)]
+pub(crate) fn mixture_lobe(glossy: bool) -> LobeFlags {
+    if glossy {
+        LobeFlags::GLOSSY_REFLECTION
+    } else {
+        LobeFlags::DIFFUSE_REFLECTION
+    }
+}
+
+/// Mean of the three channels: Mitsuba's `Texture::mean()` of an RGB constant, used for lobe
+/// sampling weights.
 #[inline]
 pub(crate) fn mean(c: Spectrum) -> f32 {
     (c.x + c.y + c.z) * (1.0 / 3.0)

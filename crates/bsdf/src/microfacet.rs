@@ -15,11 +15,12 @@
 //! Written once over [`Real`] ([`MicrofacetDistributionR`], whose α may differ lane by lane
 //! where a texture gives it): [`MicrofacetDistribution`]'s methods are its `f32`
 //! instantiation. Early returns are masks and selects, so every lane computes the whole
-//! formula (a Beckmann G1 at a back-facing normal is computed, then replaced by 0).
+//! formula (a Beckmann G1 at a back-facing normal is computed, then replaced by 0), unless
+//! no lane needs it: then the costly ones return early, a branch for one path as before.
 
 use crate::ShadingPointR;
 use glam::{Vec2, Vec3};
-use radia_math::real::{select_lazy, Real, Vector2, Vector3};
+use radia_math::real::{select_lazy, Mask, Real, Vector2, Vector3};
 use radia_math::{trig, PI};
 use radia_sampling::warp;
 
@@ -302,13 +303,17 @@ impl<R: Real> MicrofacetDistributionR<R> {
         match self.kind {
             MicrofacetType::Ggx => self.smith_g1(v, m),
             MicrofacetType::Beckmann => {
+                let back = back_facing(v, m);
+                if back.all() {
+                    return R::zero();
+                }
                 let xy_alpha_2 = self.xy_alpha_2(v);
                 let a = v.z.abs() / xy_alpha_2.sqrt();
                 const SQRT_PI: f32 = 1.772_453_9;
                 let two = R::splat(2.0);
                 let g1 = two / (R::one() + erf(a) + exp_neg(-a * a) / (a * R::splat(SQRT_PI)));
                 let g1 = R::select(xy_alpha_2.equals(R::zero()), R::one(), g1);
-                R::select(back_facing(v, m), R::zero(), g1)
+                R::select(back, R::zero(), g1)
             }
         }
     }
@@ -422,6 +427,10 @@ impl<R: Real> MicrofacetDistributionR<R> {
     /// the back of the microfacet.
     #[inline(always)]
     pub fn smith_g1(&self, v: Vector3<R>, m: Vector3<R>) -> R {
+        let back = back_facing(v, m);
+        if back.all() {
+            return R::zero();
+        }
         let xy_alpha_2 = self.xy_alpha_2(v);
         let tan_theta_alpha_2 = xy_alpha_2 / (v.z * v.z);
         let one = R::one();
@@ -436,7 +445,7 @@ impl<R: Real> MicrofacetDistributionR<R> {
             MicrofacetType::Ggx => R::splat(2.0) / (one + (one + tan_theta_alpha_2).sqrt()),
         };
         let g1 = R::select(xy_alpha_2.equals(R::zero()), one, g1);
-        R::select(back_facing(v, m), R::zero(), g1)
+        R::select(back, R::zero(), g1)
     }
 
     /// Smith's Λ(v) with G1 = 1/(1 + Λ), for the height-correlated form. For Beckmann it is
@@ -465,8 +474,12 @@ impl<R: Real> MicrofacetDistributionR<R> {
         match form {
             Shadowing::Separable => self.smith_g1(wi, m) * self.smith_g1(wo, m),
             Shadowing::HeightCorrelated => {
+                let back = back_facing(wi, m) | back_facing(wo, m);
+                if back.all() {
+                    return R::zero();
+                }
                 let g = R::one() / (R::one() + self.lambda(wi) + self.lambda(wo));
-                R::select(back_facing(wi, m) | back_facing(wo, m), R::zero(), g)
+                R::select(back, R::zero(), g)
             }
         }
     }

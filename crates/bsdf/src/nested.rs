@@ -6,7 +6,7 @@
 //! model's one path is its `f32` instantiation, so both give the same bits.
 
 use crate::{Bsdf, BsdfSampleR, LobeFlags, ShadingPointR};
-use radia_math::real::{Mask, Real, Select, Vector2, Vector3};
+use radia_math::real::{Real, Vector2, Vector3};
 use std::cell::Cell;
 
 /// The nested models' eval, pdf and sample, as an adapter asks for them.
@@ -134,26 +134,5 @@ impl<R: Real> Nested<R> for Lanes {
         u2: Vector2<R>,
     ) -> BsdfSampleR<R> {
         b.sample_r(sp, wi, u1, u2).expect("a nested lane model")
-    }
-}
-
-/// Per lane `if_true` where `m` holds, else `if_false`.
-#[inline(always)]
-pub(crate) fn select_mask<M: Mask>(m: M, if_true: M, if_false: M) -> M {
-    (m & if_true) | (!m & if_false)
-}
-
-impl<R: Real> Select<R> for BsdfSampleR<R> {
-    #[inline(always)]
-    fn select(m: R::Mask, t: Self, f: Self) -> Self {
-        Self {
-            wo: Vector3::select(m, t.wo, f.wo),
-            weight: Vector3::select(m, t.weight, f.weight),
-            pdf: R::select(m, t.pdf, f.pdf),
-            eta: R::select(m, t.eta, f.eta),
-            valid: select_mask(m, t.valid, f.valid),
-            delta: select_mask(m, t.delta, f.delta),
-            null: select_mask(m, t.null, f.null),
-        }
     }
 }

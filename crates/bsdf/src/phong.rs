@@ -20,9 +20,11 @@
 //! direction with density (n + 1)/(2π) cos^n α (samples below the surface fail). The pdf is
 //! the mixture's.
 
-use crate::{BsdfSample, LobeFlags, ShadingPoint, Texture};
+use crate::{mixture_lobe, mixture_sample_r, BsdfSample, BsdfSampleR, LobeFlags};
+use crate::{ShadingPoint, ShadingPointR, Texture};
 use glam::{Vec2, Vec3};
-use radia_math::{safe_sqrt, Frame, Spectrum, INV_PI, INV_TWO_PI, PI};
+use radia_math::real::{select_lazy, FrameR, Mask, Real, Vector2, Vector3};
+use radia_math::{coordinate_system_r, trig, Spectrum, INV_PI, INV_TWO_PI};
 use radia_sampling::warp;
 
 #[derive(Clone, Debug)]
@@ -34,28 +36,35 @@ pub struct Phong {
 }
 
 /// A direction distributed as (n + 1)/(2π) cos^n θ around +z.
-#[inline]
-pub(crate) fn square_to_power_cosine(u: Vec2, n: f32) -> Vec3 {
-    let cos_theta = u.x.powf(1.0 / (n + 1.0));
-    let sin_theta = safe_sqrt(1.0 - cos_theta * cos_theta);
-    let (s, c) = (2.0 * PI * u.y).sin_cos();
-    Vec3::new(sin_theta * c, sin_theta * s, cos_theta)
+#[inline(always)]
+pub(crate) fn square_to_power_cosine_r<R: Real>(u: Vector2<R>, n: R) -> Vector3<R> {
+    let cos_theta = u.x.powf(R::one() / (n + R::one()));
+    let sin_theta = (R::one() - cos_theta * cos_theta).safe_sqrt();
+    let (s, c) = trig::sin_cos_turns(u.y);
+    Vector3::new(sin_theta * c, sin_theta * s, cos_theta)
 }
 
 /// cos^n θ for cos θ > 0, else 0 (also for n = 0: the lobe ends at the equator).
-#[inline]
-pub(crate) fn cos_power(cos_theta: f32, n: f32) -> f32 {
-    if cos_theta > 0.0 {
-        cos_theta.min(1.0).powf(n)
-    } else {
-        0.0
-    }
+#[inline(always)]
+pub(crate) fn cos_power_r<R: Real>(cos_theta: R, n: R) -> R {
+    select_lazy(
+        cos_theta.greater(R::zero()),
+        || cos_theta.min(R::one()).powf(n),
+        R::zero,
+    )
 }
 
-/// The density of [`square_to_power_cosine`].
-#[inline]
-pub(crate) fn power_cosine_pdf(cos_theta: f32, n: f32) -> f32 {
-    (n + 1.0) * INV_TWO_PI * cos_power(cos_theta, n)
+/// The density of [`square_to_power_cosine_r`].
+#[inline(always)]
+pub(crate) fn power_cosine_pdf_r<R: Real>(cos_theta: R, n: R) -> R {
+    (n + R::one()) * R::splat(INV_TWO_PI) * cos_power_r(cos_theta, n)
+}
+
+/// Where neither direction is below (or in) the surface, as the one-path code tested
+/// `wi.z <= 0 || wo.z <= 0` (NaN directions pass).
+#[inline(always)]
+pub(crate) fn not_below<R: Real>(wi: Vector3<R>, wo: Vector3<R>) -> R::Mask {
+    !(wi.z.less_eq(R::zero()) | wo.z.less_eq(R::zero()))
 }
 
 impl Phong {
@@ -85,41 +94,102 @@ impl Phong {
 
     #[inline]
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
-        if wi.z <= 0.0 || wo.z <= 0.0 {
-            return Spectrum::ZERO;
-        }
-        let n = self.exponent;
-        let cos_alpha = crate::fresnel::reflect(wi).dot(wo);
-        let spec = (n + 2.0) * INV_TWO_PI * cos_power(cos_alpha, n);
-        (self.diffuse_reflectance.eval(sp) * INV_PI + self.specular_reflectance.eval(sp) * spec)
-            * wo.z
+        self.eval_r(&sp.into(), wi.into(), wo.into()).into()
     }
 
     #[inline]
     pub fn pdf(&self, _sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        if wi.z <= 0.0 || wo.z <= 0.0 {
-            return 0.0;
-        }
-        let ps = self.specular_probability();
-        let cos_alpha = crate::fresnel::reflect(wi).dot(wo);
-        (1.0 - ps) * warp::cosine_hemisphere_pdf(wo)
-            + ps * power_cosine_pdf(cos_alpha, self.exponent)
+        self.pdf_r(wi.into(), wo.into())
+    }
+
+    #[inline]
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let (f, pdf) = self.eval_pdf_r(&sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
     }
 
     #[inline]
     pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
-        if wi.z <= 0.0 {
-            return None;
+        let (s, specular) = self.sample_lobe(&sp.into(), wi.into(), u1, u2.into());
+        s.one_path(mixture_lobe(specular))
+    }
+
+    #[inline(always)]
+    fn eval_r<R: Real>(&self, sp: &ShadingPointR<R>, wi: Vector3<R>, wo: Vector3<R>) -> Vector3<R> {
+        let ok = not_below(wi, wo);
+        if !ok.any() {
+            return Vector3::zero();
         }
-        let specular = u1 < self.specular_probability();
-        let wo = if specular {
-            let lobe = square_to_power_cosine(u2, self.exponent);
-            Frame::from_normal(crate::fresnel::reflect(wi)).to_world(lobe)
-        } else {
-            warp::square_to_cosine_hemisphere(u2)
-        };
-        let pdf = self.pdf(sp, wi, wo);
-        crate::mixture_sample(wo, specular, pdf, || self.eval(sp, wi, wo))
+        let n = R::splat(self.exponent);
+        let cos_alpha = crate::fresnel::reflect_r(wi).dot(wo);
+        let spec = (n + R::splat(2.0)) * R::splat(INV_TWO_PI) * cos_power_r(cos_alpha, n);
+        let f = (self.diffuse_reflectance.eval_r(sp) * R::splat(INV_PI)
+            + self.specular_reflectance.eval_r(sp) * spec)
+            * wo.z;
+        Vector3::select(ok, f, Vector3::zero())
+    }
+
+    #[inline(always)]
+    fn pdf_r<R: Real>(&self, wi: Vector3<R>, wo: Vector3<R>) -> R {
+        let ok = not_below(wi, wo);
+        if !ok.any() {
+            return R::zero();
+        }
+        let ps = R::splat(self.specular_probability());
+        let cos_alpha = crate::fresnel::reflect_r(wi).dot(wo);
+        let p = (R::one() - ps) * warp::cosine_hemisphere_pdf_r(wo)
+            + ps * power_cosine_pdf_r(cos_alpha, R::splat(self.exponent));
+        R::select(ok, p, R::zero())
+    }
+
+    /// eval and pdf over any [`Real`].
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        (self.eval_r(sp, wi, wo), self.pdf_r(wi, wo))
+    }
+
+    /// sample over any [`Real`].
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        self.sample_lobe(sp, wi, u1, u2).0
+    }
+
+    /// The sample and the lanes that took the specular lobe (the cos^n lobe around the
+    /// mirror direction, else the cosine).
+    #[inline(always)]
+    fn sample_lobe<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> (BsdfSampleR<R>, R::Mask) {
+        let valid = !wi.z.less_eq(R::zero());
+        let specular = u1.less(R::splat(self.specular_probability()));
+        let wo = select_lazy(
+            specular,
+            || {
+                let lobe = square_to_power_cosine_r(u2, R::splat(self.exponent));
+                let n = crate::fresnel::reflect_r(wi);
+                let (s, t) = coordinate_system_r(n);
+                FrameR { s, t, n }.to_world(lobe)
+            },
+            || warp::square_to_cosine_hemisphere_r(u2),
+        );
+        let pdf = self.pdf_r(wi, wo);
+        let s = mixture_sample_r(wo, pdf, valid, || self.eval_r(sp, wi, wo));
+        (s, specular)
     }
 }
 

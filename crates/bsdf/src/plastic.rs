@@ -14,9 +14,12 @@
 //! F(cos θi)·s and (1 − F(cos θi))·(1 − s), s = mean(specular)/(mean(diffuse) +
 //! mean(specular)) fixed at load, as Mitsuba's `m_specular_sampling_weight`.
 
-use crate::fresnel::{fresnel_dielectric, fresnel_diffuse_reflectance, reflect};
-use crate::{BsdfSample, LobeFlags, ShadingPoint, Texture};
+use crate::fresnel::{
+    fresnel_dielectric, fresnel_dielectric_r, fresnel_diffuse_reflectance, reflect_r,
+};
+use crate::{BsdfSample, BsdfSampleR, LobeFlags, ShadingPoint, ShadingPointR, Texture};
 use glam::{Vec2, Vec3};
+use radia_math::real::{select_lazy, Mask, Real, Vector2, Vector3};
 use radia_math::Spectrum;
 use radia_sampling::warp;
 
@@ -77,84 +80,138 @@ impl Plastic {
     }
 
     /// ρ/(1 − Fdr) (or ρ/(1 − ρ Fdr) when nonlinear).
-    #[inline]
-    fn diffuse_albedo(&self, sp: &ShadingPoint) -> Spectrum {
-        let rho = self.diffuse_reflectance.eval(sp);
+    #[inline(always)]
+    fn diffuse_albedo<R: Real>(&self, sp: &ShadingPointR<R>) -> Vector3<R> {
+        let rho = self.diffuse_reflectance.eval_r(sp);
+        let fdr = R::splat(self.fdr_int);
         if self.nonlinear {
-            rho / (Spectrum::ONE - rho * self.fdr_int)
+            let d = Vector3::splat(Spectrum::ONE) - rho * fdr;
+            Vector3::new(rho.x / d.x, rho.y / d.y, rho.z / d.z)
         } else {
-            rho / (1.0 - self.fdr_int)
+            rho.div(R::one() - fdr)
         }
     }
 
     /// Probability of choosing the specular lobe given F(cos θi).
-    #[inline]
-    fn specular_probability(&self, f_i: f32) -> f32 {
-        let ps = f_i * self.specular_sampling_weight;
-        let pd = (1.0 - f_i) * (1.0 - self.specular_sampling_weight);
+    #[inline(always)]
+    fn specular_probability<R: Real>(&self, f_i: R) -> R {
+        let w = R::splat(self.specular_sampling_weight);
+        let ps = f_i * w;
+        let pd = (R::one() - f_i) * (R::one() - w);
         ps / (ps + pd)
     }
 
     #[inline]
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
-        if !(wi.z > 0.0 && wo.z > 0.0) {
-            return Spectrum::ZERO;
-        }
-        let f_i = fresnel_dielectric(wi.z, self.eta).f;
-        let f_o = fresnel_dielectric(wo.z, self.eta).f;
-        self.diffuse_albedo(sp)
-            * (warp::cosine_hemisphere_pdf(wo) * self.inv_eta_2 * (1.0 - f_i) * (1.0 - f_o))
+        self.eval_r(&sp.into(), wi.into(), wo.into()).into()
     }
 
     #[inline]
     pub fn pdf(&self, _sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        if !(wi.z > 0.0 && wo.z > 0.0) {
-            return 0.0;
-        }
-        let f_i = fresnel_dielectric(wi.z, self.eta).f;
-        let p = warp::cosine_hemisphere_pdf(wo) * (1.0 - self.specular_probability(f_i));
-        if p.is_finite() {
-            p
-        } else {
-            0.0
-        }
+        self.pdf_r(wi.into(), wo.into())
+    }
+
+    #[inline]
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let (f, pdf) = self.eval_pdf_r(&sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
     }
 
     #[inline]
     pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
-        if !(wi.z > 0.0) {
-            return None;
-        }
-        let f_i = fresnel_dielectric(wi.z, self.eta).f;
-        let prob_specular = self.specular_probability(f_i);
-        if !prob_specular.is_finite() {
-            return None;
-        }
-        if u1 < prob_specular {
-            Some(BsdfSample {
-                wo: reflect(wi),
-                weight: self.specular_reflectance.eval(sp) * (f_i / prob_specular),
-                pdf: prob_specular,
-                eta: 1.0,
-                lobe: LobeFlags::DELTA_REFLECTION,
-            })
+        let s = self.sample_r(&sp.into(), wi.into(), u1, u2.into());
+        s.one_path(if s.delta {
+            LobeFlags::DELTA_REFLECTION
         } else {
-            let wo = warp::square_to_cosine_hemisphere(u2);
-            let prob_diffuse = 1.0 - prob_specular;
-            let pdf = prob_diffuse * warp::cosine_hemisphere_pdf(wo);
-            if !(pdf > 0.0) {
-                return None;
-            }
-            let f_o = fresnel_dielectric(wo.z, self.eta).f;
-            let weight = self.diffuse_albedo(sp)
-                * (self.inv_eta_2 * (1.0 - f_i) * (1.0 - f_o) / prob_diffuse);
-            Some(BsdfSample {
-                wo,
-                weight,
-                pdf,
-                eta: 1.0,
-                lobe: LobeFlags::DIFFUSE_REFLECTION,
-            })
+            LobeFlags::DIFFUSE_REFLECTION
+        })
+    }
+
+    /// The diffuse lobe's value (the specular one is a delta).
+    #[inline(always)]
+    fn eval_r<R: Real>(&self, sp: &ShadingPointR<R>, wi: Vector3<R>, wo: Vector3<R>) -> Vector3<R> {
+        let (zero, one) = (R::zero(), R::one());
+        let above = wi.z.greater(zero) & wo.z.greater(zero);
+        if !above.any() {
+            return Vector3::zero();
+        }
+        let eta = R::splat(self.eta);
+        let f_i = fresnel_dielectric_r(wi.z, eta).f;
+        let f_o = fresnel_dielectric_r(wo.z, eta).f;
+        let f = self.diffuse_albedo(sp)
+            * (warp::cosine_hemisphere_pdf_r(wo)
+                * R::splat(self.inv_eta_2)
+                * (one - f_i)
+                * (one - f_o));
+        Vector3::select(above, f, Vector3::zero())
+    }
+
+    /// The density of the diffuse lobe's samples.
+    #[inline(always)]
+    fn pdf_r<R: Real>(&self, wi: Vector3<R>, wo: Vector3<R>) -> R {
+        let zero = R::zero();
+        let above = wi.z.greater(zero) & wo.z.greater(zero);
+        if !above.any() {
+            return zero;
+        }
+        let f_i = fresnel_dielectric_r(wi.z, R::splat(self.eta)).f;
+        let p = warp::cosine_hemisphere_pdf_r(wo) * (R::one() - self.specular_probability(f_i));
+        R::select(above & p.is_finite(), p, zero)
+    }
+
+    /// eval and pdf over any [`Real`] (the shared Fresnel term is found once, as the
+    /// compiler merges the two).
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        (self.eval_r(sp, wi, wo), self.pdf_r(wi, wo))
+    }
+
+    /// sample over any [`Real`]: the mirror direction with the specular lobe's probability,
+    /// else the cosine-weighted hemisphere.
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        let (zero, one) = (R::zero(), R::one());
+        let eta = R::splat(self.eta);
+        let f_i = fresnel_dielectric_r(wi.z, eta).f;
+        let prob_specular = self.specular_probability(f_i);
+        let specular = u1.less(prob_specular);
+        // The diffuse side is a sample of the cosine and a Fresnel term: a branch for one path.
+        let (wo, weight, pdf) = select_lazy(
+            specular,
+            || {
+                let weight = self.specular_reflectance.eval_r(sp) * (f_i / prob_specular);
+                (reflect_r(wi), weight, prob_specular)
+            },
+            || {
+                let wo = warp::square_to_cosine_hemisphere_r(u2);
+                let prob_diffuse = one - prob_specular;
+                let pdf = prob_diffuse * warp::cosine_hemisphere_pdf_r(wo);
+                let f_o = fresnel_dielectric_r(wo.z, eta).f;
+                let weight = self.diffuse_albedo(sp)
+                    * (R::splat(self.inv_eta_2) * (one - f_i) * (one - f_o) / prob_diffuse);
+                (wo, weight, pdf)
+            },
+        );
+        BsdfSampleR {
+            wo,
+            weight,
+            pdf,
+            eta: one,
+            // A chosen specular lobe has u1 < its probability, so a positive density.
+            valid: wi.z.greater(zero) & prob_specular.is_finite() & pdf.greater(zero),
+            delta: specular,
+            null: R::Mask::splat(false),
         }
     }
 }
@@ -162,6 +219,7 @@ impl Plastic {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fresnel::reflect;
     use crate::testing::*;
     use crate::Bsdf;
 

@@ -16,7 +16,7 @@
 //! microfacet normal (visible normals by default) and mirrored, with the 1/(4 wo·h)
 //! Jacobian of the half-vector map. Written once over [`Real`] (`eval_pdf_r`, `sample_r`)
 //! for one path or a packet's lanes; the microfacet reflection pieces here are shared with
-//! the plastics and Cook–Torrance.
+//! the rough plastic and Cook–Torrance.
 
 use crate::fresnel::{fresnel_conductor_r, reflect_about_r};
 use crate::microfacet::{
@@ -153,39 +153,6 @@ pub(crate) fn sample_microfacet_reflection_r<R: Real>(
         weight,
         valid,
     }
-}
-
-/// One path's [`microfacet_reflection_r`] and the half vector, None where it is zero.
-#[inline]
-pub(crate) fn microfacet_reflection(
-    d: &MicrofacetDistribution,
-    shadowing: Shadowing,
-    wi: Vec3,
-    wo: Vec3,
-) -> Option<(f32, Vec3)> {
-    let (dist, wi, wo) = (d.splat::<f32>(), wi.into(), wo.into());
-    let hv = HalfVector::new(&dist, wi, wo)?;
-    let (v, ok) = microfacet_reflection_r(&dist, shadowing, wi, wo, &hv);
-    ok.then(|| (v, hv.h.into()))
-}
-
-/// One path's [`microfacet_reflection_pdf_r`].
-#[inline]
-pub(crate) fn microfacet_reflection_pdf(d: &MicrofacetDistribution, wi: Vec3, wo: Vec3) -> f32 {
-    let (dist, wi, wo) = (d.splat::<f32>(), wi.into(), wo.into());
-    HalfVector::new(&dist, wi, wo).map_or(0.0, |hv| microfacet_reflection_pdf_r(&dist, wi, wo, &hv))
-}
-
-/// One path's [`sample_microfacet_reflection_r`]: (wo, m, pdf, weight), None where invalid.
-#[inline]
-pub(crate) fn sample_microfacet_reflection(
-    d: &MicrofacetDistribution,
-    shadowing: Shadowing,
-    wi: Vec3,
-    u: Vec2,
-) -> Option<MicrofacetSample<f32>> {
-    let s = sample_microfacet_reflection_r(&d.splat::<f32>(), shadowing, wi.into(), u.into());
-    s.valid.then_some(s)
 }
 
 impl RoughConductor {

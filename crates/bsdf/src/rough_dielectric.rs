@@ -24,11 +24,16 @@
 //! internal reflection) or refraction; the pdf includes that probability and the Jacobian of
 //! the half-vector map. Without `sample_visible` the roughness is widened by
 //! 1.2 − 0.2 √|cos θi| for sampling, Walter's trick, as Mitsuba.
+//!
+//! Written once over [`Real`] (`eval_pdf_r`, `sample_r`) for one path or a packet's lanes.
 
-use crate::fresnel::{fresnel_dielectric, reflect_about, refract_about};
-use crate::microfacet::{MicrofacetDistribution, RoughnessTextures, Shadowing};
-use crate::{BsdfSample, LobeFlags, ShadingPoint, Texture};
+use crate::fresnel::{fresnel_dielectric_r, reflect_about_r, refract_about_r};
+use crate::microfacet::{
+    MicrofacetDistribution, MicrofacetDistributionR, RoughnessTextures, Shadowing,
+};
+use crate::{BsdfSample, BsdfSampleR, LobeFlags, ShadingPoint, ShadingPointR, Texture};
 use glam::{Vec2, Vec3};
+use radia_math::real::{select_lazy, Mask, Real, Vector2, Vector3};
 use radia_math::Spectrum;
 
 #[derive(Clone, Debug)]
@@ -44,51 +49,73 @@ pub struct RoughDielectric {
 }
 
 /// `v` turned to the side of `s` (Mitsuba's `mulsign(v, s)`).
-#[inline]
-fn mulsign(v: Vec3, s: f32) -> Vec3 {
-    if s < 0.0 {
-        -v
-    } else {
-        v
-    }
+#[inline(always)]
+fn mulsign<R: Real>(v: Vector3<R>, s: R) -> Vector3<R> {
+    let neg = s.less(R::zero());
+    Vector3::new(
+        v.x.negate_where(neg),
+        v.y.negate_where(neg),
+        v.z.negate_where(neg),
+    )
 }
 
-/// The generalized half vector of (wi, wo), on the upper side, with the η seen from wi and
-/// whether it is a reflection. None for grazing wi or a degenerate configuration.
-#[inline]
-fn half_vector(
-    eta_int_ext: f32,
-    eta_ext_int: f32,
-    wi: Vec3,
-    wo: Vec3,
-) -> Option<(Vec3, f32, bool)> {
-    let (cos_i, cos_o) = (wi.z, wo.z);
-    if cos_i == 0.0 {
-        return None;
+/// The generalized half vector of (wi, wo), turned to the upper side, with the η seen from
+/// wi and whether the pair is a reflection.
+#[derive(Clone, Copy, Debug)]
+struct HalfVector<R: Real> {
+    m: Vector3<R>,
+    eta: R,
+    reflect: R::Mask,
+    /// Lanes where it exists: wi not grazing, m finite (zero value and density elsewhere).
+    valid: R::Mask,
+}
+
+impl<R: Real> HalfVector<R> {
+    /// None when no lane has one.
+    #[inline(always)]
+    fn new(eta_int_ext: f32, eta_ext_int: f32, wi: Vector3<R>, wo: Vector3<R>) -> Option<Self> {
+        let zero = R::zero();
+        let (cos_i, cos_o) = (wi.z, wo.z);
+        let grazing = cos_i.equals(zero);
+        if grazing.all() {
+            return None;
+        }
+        let reflect = (cos_i * cos_o).greater(zero);
+        let eta = R::select(
+            cos_i.greater(zero),
+            R::splat(eta_int_ext),
+            R::splat(eta_ext_int),
+        );
+        // For η near 1 the refraction half vector wi + η wo nearly cancels: each component
+        // is a fused multiply-add, rounded once from the exact value (as in f64, where the
+        // one-path code once computed it).
+        let s = R::select(reflect, R::one(), eta);
+        let v = Vector3::new(
+            s.mul_add(wo.x, wi.x),
+            s.mul_add(wo.y, wi.y),
+            s.mul_add(wo.z, wi.z),
+        );
+        let m = v.normalize();
+        let m = mulsign(m, m.z);
+        Some(Self {
+            m,
+            eta,
+            reflect,
+            valid: !grazing & m.is_finite(),
+        })
     }
-    let reflect = cos_i * cos_o > 0.0;
-    let eta = if cos_i > 0.0 {
-        eta_int_ext
-    } else {
-        eta_ext_int
-    };
-    // In f64: for η near 1 the refraction half vector wi + η wo nearly cancels.
-    let s = if reflect { 1.0 } else { eta as f64 };
-    let m = (wi.as_dvec3() + wo.as_dvec3() * s).normalize();
-    let m = if m.z < 0.0 { -m } else { m }.as_vec3();
-    m.is_finite().then_some((m, eta, reflect))
 }
 
 /// The distribution normals are sampled from (Walter's widening without visible normals).
-#[inline]
-fn sampling_distribution(
-    dist: &MicrofacetDistribution,
-    cos_theta_i: f32,
-) -> MicrofacetDistribution {
+#[inline(always)]
+fn sampling_distribution<R: Real>(
+    dist: &MicrofacetDistributionR<R>,
+    cos_theta_i: R,
+) -> MicrofacetDistributionR<R> {
     if dist.sample_visible {
         *dist
     } else {
-        dist.scaled(1.2 - 0.2 * cos_theta_i.abs().sqrt())
+        dist.scaled(R::splat(1.2) - R::splat(0.2) * cos_theta_i.abs().sqrt())
     }
 }
 
@@ -116,105 +143,193 @@ impl RoughDielectric {
 
     #[inline]
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
-        let Some((m, eta, reflect)) = half_vector(self.eta, self.inv_eta, wi, wo) else {
+        let (sp, wi, wo) = (sp.into(), wi.into(), wo.into());
+        let Some(hv) = HalfVector::new(self.eta, self.inv_eta, wi, wo) else {
             return Spectrum::ZERO;
         };
-        let dist = self.distribution.at(&self.roughness, sp);
-        let d = dist.eval(m);
-        if !(d > 0.0) {
-            return Spectrum::ZERO;
-        }
-        let f = fresnel_dielectric(wi.dot(m), self.eta).f;
-        let g = dist.g(wi, wo, m, Shadowing::Separable);
-        if !(g > 0.0) {
-            return Spectrum::ZERO;
-        }
-        let cos_i = wi.z;
-        let value = if reflect {
-            self.specular_reflectance.eval(sp) * (f * d * g / (4.0 * cos_i.abs()))
-        } else {
-            let (dot_i, dot_o) = (wi.dot(m), wo.dot(m));
-            let denom = dot_i + eta * dot_o;
-            // Radiance mode: scale 1/η² (Mitsuba's `scale`), cancelling Walter's η².
-            let scale = 1.0 / (eta * eta);
-            let v = (scale * (1.0 - f) * d * g * eta * eta * dot_i * dot_o
-                / (cos_i * denom * denom))
-                .abs();
-            self.specular_transmittance.eval(sp) * v
-        };
-        if value.is_finite() {
-            value
-        } else {
-            Spectrum::ZERO
-        }
+        let dist = self.distribution.at_r(&self.roughness, &sp);
+        self.value(&sp, &dist, wi, wo, &hv, dist.eval(hv.m)).into()
     }
 
     #[inline]
     pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        let Some((m, eta, reflect)) = half_vector(self.eta, self.inv_eta, wi, wo) else {
-            return 0.0;
-        };
-        let (dot_i, dot_o) = (wi.dot(m), wo.dot(m));
-        // The sidedness checks smith_g1 makes in eval and sample (Mitsuba's pdf does too).
-        if !(dot_i * wi.z > 0.0 && dot_o * wo.z > 0.0) {
-            return 0.0;
-        }
-        let dwh_dwo = if reflect {
-            1.0 / (4.0 * dot_o)
-        } else {
-            let denom = dot_i + eta * dot_o;
-            eta * eta * dot_o / (denom * denom)
-        };
-        let dist = self.distribution.at(&self.roughness, sp);
-        let mut prob = sampling_distribution(&dist, wi.z).pdf(mulsign(wi, wi.z), m);
-        let f = fresnel_dielectric(dot_i, self.eta).f;
-        prob *= if reflect { f } else { 1.0 - f };
-        let p = prob * dwh_dwo.abs();
-        if p.is_finite() {
-            p
-        } else {
-            0.0
-        }
+        self.eval_pdf(sp, wi, wo).1
+    }
+
+    #[inline]
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let (f, pdf) = self.eval_pdf_r(&sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
     }
 
     #[inline]
     pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
+        let (s, reflected) = self.sample_lobe(&sp.into(), wi.into(), u1, u2.into());
+        s.one_path(if reflected {
+            LobeFlags::GLOSSY_REFLECTION
+        } else {
+            LobeFlags::GLOSSY_TRANSMISSION
+        })
+    }
+
+    /// The value at the half vector `hv`, D(m) = `d`.
+    #[inline(always)]
+    fn value<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        dist: &MicrofacetDistributionR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+        hv: &HalfVector<R>,
+        d: R,
+    ) -> Vector3<R> {
+        let (zero, one) = (R::zero(), R::one());
+        let (m, eta) = (hv.m, hv.eta);
+        let ok = hv.valid & d.greater(zero);
+        if !ok.any() {
+            return Vector3::zero();
+        }
+        let g = dist.g(wi, wo, m, Shadowing::Separable);
+        let ok = ok & g.greater(zero);
+        if !ok.any() {
+            return Vector3::zero();
+        }
+        let f = fresnel_dielectric_r(wi.dot(m), R::splat(self.eta)).f;
         let cos_i = wi.z;
-        if cos_i == 0.0 || !wi.is_finite() {
-            return None;
+        let value = select_lazy(
+            hv.reflect,
+            || self.specular_reflectance.eval_r(sp) * (f * d * g / (R::splat(4.0) * cos_i.abs())),
+            || {
+                let (dot_i, dot_o) = (wi.dot(m), wo.dot(m));
+                let denom = dot_i + eta * dot_o;
+                // Radiance mode: scale 1/η² (Mitsuba's `scale`), cancelling Walter's η².
+                let scale = one / (eta * eta);
+                let v = (scale * (one - f) * d * g * eta * eta * dot_i * dot_o
+                    / (cos_i * denom * denom))
+                    .abs();
+                self.specular_transmittance.eval_r(sp) * v
+            },
+        );
+        Vector3::select(ok & value.is_finite(), value, Vector3::zero())
+    }
+
+    /// The density of `wo` at the half vector `hv`, D(m) of `dist` = `d`.
+    #[inline(always)]
+    fn density<R: Real>(
+        &self,
+        dist: &MicrofacetDistributionR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+        hv: &HalfVector<R>,
+        d: R,
+    ) -> R {
+        let (zero, one) = (R::zero(), R::one());
+        let (m, eta) = (hv.m, hv.eta);
+        let (dot_i, dot_o) = (wi.dot(m), wo.dot(m));
+        // The sidedness checks smith_g1 makes in eval and sample (Mitsuba's pdf does too).
+        let facing = hv.valid & (dot_i * wi.z).greater(zero) & (dot_o * wo.z).greater(zero);
+        if !facing.any() {
+            return zero;
         }
-        let dist = self.distribution.at(&self.roughness, sp);
+        let denom = dot_i + eta * dot_o;
+        let dwh_dwo = R::select(
+            hv.reflect,
+            one / (R::splat(4.0) * dot_o),
+            eta * eta * dot_o / (denom * denom),
+        );
+        let sampling = sampling_distribution(dist, wi.z);
+        let d_sampling = if dist.sample_visible {
+            d
+        } else {
+            sampling.eval(m)
+        };
+        let prob = sampling.pdf_given(d_sampling, mulsign(wi, wi.z), m);
+        let f = fresnel_dielectric_r(dot_i, R::splat(self.eta)).f;
+        let prob = prob * R::select(hv.reflect, f, one - f);
+        let p = prob * dwh_dwo.abs();
+        R::select(facing & p.is_finite(), p, zero)
+    }
+
+    /// eval and pdf over any [`Real`]: the half vector, the roughness and D found once.
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        let Some(hv) = HalfVector::new(self.eta, self.inv_eta, wi, wo) else {
+            return (Vector3::zero(), R::zero());
+        };
+        let dist = self.distribution.at_r(&self.roughness, sp);
+        let d = dist.eval(hv.m);
+        (
+            self.value(sp, &dist, wi, wo, &hv, d),
+            self.density(&dist, wi, wo, &hv, d),
+        )
+    }
+
+    /// sample over any [`Real`].
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        self.sample_lobe(sp, wi, u1, u2).0
+    }
+
+    /// The sample and the lanes that reflected (the others refracted).
+    #[inline(always)]
+    fn sample_lobe<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> (BsdfSampleR<R>, R::Mask) {
+        let (zero, one, four) = (R::zero(), R::one(), R::splat(4.0));
+        let cos_i = wi.z;
+        let valid = !cos_i.equals(zero) & wi.is_finite();
+        if !valid.any() {
+            return (BsdfSampleR::none(), R::Mask::splat(false));
+        }
+        let dist = self.distribution.at_r(&self.roughness, sp);
         let sampling = sampling_distribution(&dist, cos_i);
-        let (m, pdf_m) = sampling.sample(mulsign(wi, cos_i), u2);
-        if !(pdf_m > 0.0) {
-            return None;
-        }
-        let fr = fresnel_dielectric(wi.dot(m), self.eta);
+        let wi_up = mulsign(wi, cos_i);
+        let (m, pdf_m) = sampling.sample(wi_up, u2);
+        let dot_i = wi.dot(m);
+        let fr = fresnel_dielectric_r(dot_i, R::splat(self.eta));
         let f = fr.f;
         // Mitsuba: u1 ≤ F; `<` never picks a lobe of probability 0.
-        let selected_r = u1 < f;
-        let (wo, mut weight, eta, lobe, lobe_prob, dwh_dwo);
-        if selected_r {
-            wo = reflect_about(wi, m);
-            weight = self.specular_reflectance.eval(sp);
-            eta = 1.0;
-            lobe = LobeFlags::GLOSSY_REFLECTION;
-            lobe_prob = f;
-            dwh_dwo = 1.0 / (4.0 * wo.dot(m));
-        } else {
-            wo = refract_about(wi, m, fr.cos_theta_t, fr.eta_ti);
-            // Radiance mode: solid angle compression.
-            weight = self.specular_transmittance.eval(sp) * (fr.eta_ti * fr.eta_ti);
-            eta = fr.eta_it;
-            lobe = LobeFlags::GLOSSY_TRANSMISSION;
-            lobe_prob = 1.0 - f;
-            let denom = wi.dot(m) + eta * wo.dot(m);
-            dwh_dwo = eta * eta * wo.dot(m) / (denom * denom);
-        }
+        let reflected = u1.less(f);
+        // A branch for one path (the lobe is mostly the same, as Fresnel is mostly small): the
+        // reflected or refracted direction, its weight before G, η, the lobe's probability
+        // and the Jacobian of the half-vector map.
+        let ((wo, weight), (eta, lobe_prob, dwh_dwo)) = select_lazy(
+            reflected,
+            || {
+                let wo = reflect_about_r(wi, m);
+                let weight = self.specular_reflectance.eval_r(sp);
+                ((wo, weight), (one, f, one / (four * wo.dot(m))))
+            },
+            || {
+                let wo = refract_about_r(wi, m, fr.cos_theta_t, fr.eta_ti);
+                // Radiance mode: solid angle compression.
+                let weight = self.specular_transmittance.eval_r(sp) * (fr.eta_ti * fr.eta_ti);
+                let eta = fr.eta_it;
+                let dot_o = wo.dot(m);
+                let denom = dot_i + eta * dot_o;
+                let dwh_dwo = eta * eta * dot_o / (denom * denom);
+                ((wo, weight), (eta, one - f, dwh_dwo))
+            },
+        );
         let g = if dist.sample_visible {
             // G/G1(wi) with the exact G1 of the visible-normal density: Mitsuba's G1(wo) for
-            // GGX (see `MicrofacetDistribution::visible_g1` for Beckmann).
-            dist.g(wi, wo, m, Shadowing::Separable) / dist.visible_g1(mulsign(wi, cos_i), m)
+            // GGX (see `MicrofacetDistributionR::visible_g1` for Beckmann).
+            dist.g(wi, wo, m, Shadowing::Separable) / dist.visible_g1(wi_up, m)
         } else {
             // Walter et al.'s weight G (wi·m)/(cos θi cos θm) assumes normals drawn from D
             // itself; with the widened sampling distribution D' it needs D(m)/D'(m) too.
@@ -222,28 +337,35 @@ impl RoughDielectric {
             // contributions follow the lobe of the widened roughness (per direction off by
             // D/D', about 6% at the lobe's centre for cos θi = 0.7; the total albedo barely
             // changes). radia keeps weight = eval/pdf.
-            dist.g(wi, wo, m, Shadowing::Separable) * wi.dot(m) / (cos_i * m.z)
+            dist.g(wi, wo, m, Shadowing::Separable) * dot_i / (cos_i * m.z)
                 * (dist.eval(m) / sampling.eval(m))
         };
-        weight *= g;
+        let weight = weight * g;
         let pdf = pdf_m * lobe_prob * dwh_dwo.abs();
         // Zero weight: the sample left on the wrong side of the macro- or microsurface.
-        if !(g > 0.0) || !(pdf > 0.0) || !pdf.is_finite() || !weight.is_finite() {
-            return None;
-        }
-        Some(BsdfSample {
+        let valid = valid
+            & pdf_m.greater(zero)
+            & g.greater(zero)
+            & pdf.greater(zero)
+            & pdf.is_finite()
+            & weight.is_finite();
+        let s = BsdfSampleR {
             wo: wo.normalize(),
             weight,
             pdf,
             eta,
-            lobe,
-        })
+            valid,
+            delta: R::Mask::splat(false),
+            null: R::Mask::splat(false),
+        };
+        (s, reflected)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fresnel::fresnel_dielectric;
     use crate::microfacet::MicrofacetType;
     use crate::testing::*;
     use crate::Bsdf;

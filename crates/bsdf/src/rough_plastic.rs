@@ -19,13 +19,17 @@
 //! sampler (`eval_transmittance` in `include/mitsuba/render/microfacet.h`), and Fdr as
 //! 2∫ R_int(μ) μ dμ by the mean over the same 64 μ (`eval_reflectance` with 1/η). Sampling
 //! mixes visible-normal reflection and the cosine, with probabilities
-//! (1 − t(cos θi))·s and t(cos θi)·(1 − s); the weight is eval/pdf of the mixture.
+//! (1 − t(cos θi))·s and t(cos θi)·(1 − s); the weight is eval/pdf of the mixture. Written
+//! once over [`Real`] (`eval_pdf_r`, `sample_r`) for one path or a packet's lanes.
 
-use crate::fresnel::{fresnel_dielectric, reflect_about, refract_about};
+use crate::fresnel::{
+    fresnel_dielectric, fresnel_dielectric_r, reflect_about, reflect_about_r, refract_about,
+};
 use crate::microfacet::{MicrofacetDistribution, MicrofacetType, Shadowing};
-use crate::rough_conductor::{microfacet_reflection, microfacet_reflection_pdf};
-use crate::{BsdfSample, LobeFlags, ShadingPoint, Texture};
+use crate::rough_conductor::{microfacet_reflection_pdf_r, microfacet_reflection_r, HalfVector};
+use crate::{BsdfSample, BsdfSampleR, LobeFlags, ShadingPoint, ShadingPointR, Texture};
 use glam::{Vec2, Vec3};
+use radia_math::real::{select_lazy, Mask, Real, Vector2, Vector3};
 use radia_math::{Spectrum, INV_PI};
 use radia_sampling::warp;
 
@@ -121,11 +125,18 @@ fn quadrature_over_visible_normals(
     eta: f32,
     f: impl Fn(Vec3, Vec3) -> f32,
 ) -> f32 {
-    let res = if eta > 1.0 { 32 } else { 128 };
-    let (nodes, weights) = gauss_legendre(res);
-    let u: Vec<f32> = nodes.iter().map(|x| (x * 0.5 + 0.5) as f32).collect();
+    // The two rules, made once (each table row integrates over one of them twice).
+    static RULES: std::sync::OnceLock<[(Vec<f32>, Vec<f64>); 2]> = std::sync::OnceLock::new();
+    let rules = RULES.get_or_init(|| {
+        [32, 128].map(|res| {
+            let (nodes, weights) = gauss_legendre(res);
+            let u = nodes.iter().map(|x| (x * 0.5 + 0.5) as f32).collect();
+            (u, weights)
+        })
+    });
+    let (u, weights) = &rules[usize::from(!(eta > 1.0))];
     let mut sum = 0.0f64;
-    d.visible_normals_grid(wi, &u, &u, |i, j, m| {
+    d.visible_normals_grid(wi, u, u, |i, j, m| {
         let v = f(m, wi);
         if v.is_finite() {
             sum += v as f64 * weights[i] * weights[j] * 0.25;
@@ -206,13 +217,19 @@ impl RoughPlastic {
     /// t(μ), linearly interpolated in the table (Mitsuba's `lerp_gather`).
     #[inline]
     pub fn transmittance(&self, mu: f32) -> f32 {
-        let x = mu.clamp(0.0, 1.0) * (TRANSMITTANCE_RES - 1) as f32;
-        let i = (x as usize).min(TRANSMITTANCE_RES - 2);
-        let (v0, v1) = (
-            self.external_transmittance[i],
-            self.external_transmittance[i + 1],
-        );
-        v0 + (v1 - v0) * (x - i as f32)
+        self.transmittance_r(mu)
+    }
+
+    /// [`RoughPlastic::transmittance`] over any [`Real`] (the table read lane by lane).
+    #[inline(always)]
+    pub fn transmittance_r<R: Real>(&self, mu: R) -> R {
+        let x = mu.clamp(R::zero(), R::one()) * R::splat((TRANSMITTANCE_RES - 1) as f32);
+        let index = |k: usize| (x.lane(k) as usize).min(TRANSMITTANCE_RES - 2);
+        let t = &self.external_transmittance;
+        let v0 = R::from_fn(|k| t[index(k)]);
+        let v1 = R::from_fn(|k| t[index(k) + 1]);
+        let i = R::from_fn(|k| index(k) as f32);
+        v0 + (v1 - v0) * (x - i)
     }
 
     /// The internal diffuse reflectance Fdr of the rough interface.
@@ -220,80 +237,125 @@ impl RoughPlastic {
         self.internal_reflectance
     }
 
-    #[inline]
-    fn specular_probability(&self, t_i: f32) -> f32 {
-        let ps = (1.0 - t_i) * self.specular_sampling_weight;
-        let pd = t_i * (1.0 - self.specular_sampling_weight);
+    #[inline(always)]
+    fn specular_probability<R: Real>(&self, t_i: R) -> R {
+        let (one, w) = (R::one(), R::splat(self.specular_sampling_weight));
+        let ps = (one - t_i) * w;
+        let pd = t_i * (one - w);
         ps / (ps + pd)
     }
 
     #[inline]
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
-        if !(wi.z > 0.0 && wo.z > 0.0) {
-            return Spectrum::ZERO;
-        }
-        let mut value = Spectrum::ZERO;
-        if let Some((v, h)) =
-            microfacet_reflection(&self.distribution, Shadowing::Separable, wi, wo)
-        {
-            let f = fresnel_dielectric(wi.dot(h), self.eta).f;
-            value += self.specular_reflectance.eval(sp) * (f * v);
-        }
-        let (t_i, t_o) = (self.transmittance(wi.z), self.transmittance(wo.z));
-        let rho = self.diffuse_reflectance.eval(sp);
-        let diff = if self.nonlinear {
-            rho / (Spectrum::ONE - rho * self.internal_reflectance)
-        } else {
-            rho / (1.0 - self.internal_reflectance)
-        };
-        value += diff * (INV_PI * self.inv_eta_2 * wo.z * t_i * t_o);
-        value
+        self.eval_pdf(sp, wi, wo).0
     }
 
     #[inline]
-    pub fn pdf(&self, _sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        if !(wi.z > 0.0 && wo.z > 0.0) {
-            return 0.0;
-        }
-        let ps = self.specular_probability(self.transmittance(wi.z));
-        let p = ps * microfacet_reflection_pdf(&self.distribution, wi, wo)
-            + (1.0 - ps) * warp::cosine_hemisphere_pdf(wo);
-        if p.is_finite() {
-            p
-        } else {
-            0.0
-        }
+    pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
+        self.eval_pdf(sp, wi, wo).1
+    }
+
+    #[inline]
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let (f, pdf) = self.eval_pdf_r(&sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
     }
 
     #[inline]
     pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
-        if !(wi.z > 0.0) {
-            return None;
-        }
-        let ps = self.specular_probability(self.transmittance(wi.z));
-        let specular = u1 < ps;
-        let wo = if specular {
-            let (m, _) = self.distribution.sample(wi, u2);
-            reflect_about(wi, m)
+        let (s, specular) = self.sample_lobe(&sp.into(), wi.into(), u1, u2.into());
+        s.one_path(if specular {
+            LobeFlags::GLOSSY_REFLECTION
         } else {
-            warp::square_to_cosine_hemisphere(u2)
+            LobeFlags::DIFFUSE_REFLECTION
+        })
+    }
+
+    /// eval and pdf over any [`Real`]: the half vector found once for both lobes' value and
+    /// density.
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        let (zero, one) = (R::zero(), R::one());
+        let dist = self.distribution.splat::<R>();
+        let Some(hv) = HalfVector::new(&dist, wi, wo) else {
+            return (Vector3::zero(), zero);
         };
-        let pdf = self.pdf(sp, wi, wo);
-        if !(pdf > 0.0) {
-            return None;
+        let (v, ok) = microfacet_reflection_r(&dist, Shadowing::Separable, wi, wo, &hv);
+        let f = fresnel_dielectric_r(wi.dot(hv.h), R::splat(self.eta)).f;
+        let specular = self.specular_reflectance.eval_r(sp) * (f * v);
+        let t_i = self.transmittance_r(wi.z);
+        let t_o = self.transmittance_r(wo.z);
+        let rho = self.diffuse_reflectance.eval_r(sp);
+        let fdr = R::splat(self.internal_reflectance);
+        let diff = if self.nonlinear {
+            let d = Vector3::splat(Spectrum::ONE) - rho * fdr;
+            Vector3::new(rho.x / d.x, rho.y / d.y, rho.z / d.z)
+        } else {
+            rho.div(one - fdr)
+        };
+        let value = Vector3::select(ok, specular, Vector3::zero())
+            + diff * (R::splat(INV_PI * self.inv_eta_2) * wo.z * t_i * t_o);
+
+        let ps = self.specular_probability(t_i);
+        let p = ps * microfacet_reflection_pdf_r(&dist, wi, wo, &hv)
+            + (one - ps) * warp::cosine_hemisphere_pdf_r(wo);
+        (
+            Vector3::select(hv.above, value, Vector3::zero()),
+            R::select(hv.above & p.is_finite(), p, zero),
+        )
+    }
+
+    /// sample over any [`Real`].
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        self.sample_lobe(sp, wi, u1, u2).0
+    }
+
+    /// The sample and the lanes that took the specular lobe: a visible microfacet normal
+    /// mirrored, or the cosine; the weight is eval/pdf of the mixture.
+    #[inline(always)]
+    fn sample_lobe<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> (BsdfSampleR<R>, R::Mask) {
+        let zero = R::zero();
+        let valid = wi.z.greater(zero);
+        if !valid.any() {
+            return (BsdfSampleR::none(), R::Mask::splat(false));
         }
-        let weight = self.eval(sp, wi, wo) / pdf;
-        weight.is_finite().then_some(BsdfSample {
+        let ps = self.specular_probability(self.transmittance_r(wi.z));
+        let specular = u1.less(ps);
+        let wo = select_lazy(
+            specular,
+            || reflect_about_r(wi, self.distribution.splat().sample(wi, u2).0),
+            || warp::square_to_cosine_hemisphere_r(u2),
+        );
+        let (f, pdf) = self.eval_pdf_r(sp, wi, wo);
+        let weight = f.div(pdf);
+        let s = BsdfSampleR {
             wo,
             weight,
             pdf,
-            eta: 1.0,
-            lobe: if specular {
-                LobeFlags::GLOSSY_REFLECTION
-            } else {
-                LobeFlags::DIFFUSE_REFLECTION
-            },
-        })
+            eta: R::one(),
+            valid: valid & pdf.greater(zero) & weight.is_finite(),
+            delta: R::Mask::splat(false),
+            null: R::Mask::splat(false),
+        };
+        (s, specular)
     }
 }
 

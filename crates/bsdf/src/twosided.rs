@@ -7,10 +7,12 @@
 //! </bsdf>
 //! ```
 //! A query from below the surface is mirrored (z → −z) onto the front side of the back BSDF.
-//! Only reflective models may be nested, as in Mitsuba.
+//! Only reflective models may be nested, as in Mitsuba. Over [`Real`] (`eval_pdf_r`,
+//! `sample_r`, where both sides have lane versions) each lane takes its own side.
 
-use crate::{Bsdf, BsdfSample, LobeFlags, ShadingPoint};
+use crate::{Bsdf, BsdfSample, BsdfSampleR, LobeFlags, ShadingPoint, ShadingPointR};
 use glam::{Vec2, Vec3};
+use radia_math::real::{select_lazy, Real, Vector2, Vector3};
 use radia_math::Spectrum;
 
 #[derive(Clone, Debug)]
@@ -19,9 +21,17 @@ pub struct TwoSided {
     pub sides: Box<[Bsdf; 2]>,
 }
 
-#[inline]
-fn flip(v: Vec3) -> Vec3 {
-    Vec3::new(v.x, v.y, -v.z)
+/// `v` mirrored onto the other side (z → −z).
+#[inline(always)]
+fn flip<R: Real>(v: Vector3<R>) -> Vector3<R> {
+    Vector3::new(v.x, v.y, -v.z)
+}
+
+/// The lanes whose query is on the front side (wi.z ≥ 0); the others go to the back BSDF,
+/// mirrored.
+#[inline(always)]
+fn front<R: Real>(wi: Vector3<R>) -> R::Mask {
+    wi.z.greater_eq(R::zero())
 }
 
 impl TwoSided {
@@ -35,33 +45,107 @@ impl TwoSided {
         self.sides[0].flags() | self.sides[1].flags()
     }
 
+    /// Whether both sides have lane versions (then so has this).
+    pub fn has_r(&self) -> bool {
+        self.sides.iter().all(Bsdf::has_r)
+    }
+
+    /// `f` of the side of `wi`, lane by lane: the front side's, or the back side's at the
+    /// mirrored directions (a branch for one path).
+    #[inline(always)]
+    fn by_side<R: Real, T: radia_math::real::Select<R>>(
+        &self,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+        f: impl Fn(&Bsdf, Vector3<R>, Vector3<R>) -> T,
+    ) -> T {
+        select_lazy(
+            front(wi),
+            || f(&self.sides[0], wi, wo),
+            || f(&self.sides[1], flip(wi), flip(wo)),
+        )
+    }
+
     #[inline]
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
-        if wi.z >= 0.0 {
-            self.sides[0].eval(sp, wi, wo)
-        } else {
-            self.sides[1].eval(sp, flip(wi), flip(wo))
-        }
+        self.by_side(wi.into(), wo.into(), |b, wi, wo| {
+            Vector3::from(b.eval(sp, wi.into(), wo.into()))
+        })
+        .into()
     }
 
     #[inline]
     pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        if wi.z >= 0.0 {
-            self.sides[0].pdf(sp, wi, wo)
-        } else {
-            self.sides[1].pdf(sp, flip(wi), flip(wo))
-        }
+        self.by_side(wi.into(), wo.into(), |b, wi, wo| {
+            b.pdf(sp, wi.into(), wo.into())
+        })
+    }
+
+    #[inline]
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let (f, pdf) = self.by_side(wi.into(), wo.into(), |b, wi, wo| {
+            let (f, pdf) = b.eval_pdf(sp, wi.into(), wo.into());
+            (Vector3::from(f), pdf)
+        });
+        (f.into(), pdf)
     }
 
     #[inline]
     pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
-        if wi.z >= 0.0 {
+        // The side as `by_side` chooses it (a sample with its lobe flags is no `Select`).
+        if front::<f32>(wi.into()) {
             self.sides[0].sample(sp, wi, u1, u2)
         } else {
-            let mut s = self.sides[1].sample(sp, flip(wi), u1, u2)?;
-            s.wo = flip(s.wo);
+            let mut s = self.sides[1].sample(sp, flip::<f32>(wi.into()).into(), u1, u2)?;
+            s.wo = flip::<f32>(s.wo.into()).into();
             Some(s)
         }
+    }
+
+    /// eval and pdf over any [`Real`], where both sides have lane versions.
+    #[inline(never)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> Option<(Vector3<R>, R)> {
+        if !self.has_r() {
+            return None;
+        }
+        Some(self.by_side(wi, wo, |b, wi, wo| {
+            b.eval_pdf_r(sp, wi, wo).expect("a lane model")
+        }))
+    }
+
+    /// sample over any [`Real`], where both sides have lane versions.
+    #[inline(never)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> Option<BsdfSampleR<R>> {
+        if !self.has_r() {
+            return None;
+        }
+        Some(select_lazy(
+            front(wi),
+            || {
+                self.sides[0]
+                    .sample_r(sp, wi, u1, u2)
+                    .expect("a lane model")
+            },
+            || {
+                let s = self.sides[1].sample_r(sp, flip(wi), u1, u2);
+                let s = s.expect("a lane model");
+                BsdfSampleR {
+                    wo: flip(s.wo),
+                    ..s
+                }
+            },
+        ))
     }
 }
 

@@ -324,13 +324,23 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         let values = bounce_values(&paths, going);
 
         // ---- Next-event estimation, sixteen at once ----
-        // The shading points of the lane models: uv only (none of them reads the surface's
-        // tangents, `Bsdf::reads_surface_frame`).
-        let sp = ShadingPointR {
-            uv: its.uv,
-            dp_du: Vector3::splat(Vec3::X),
-            dp_dv: Vector3::splat(Vec3::Y),
-            n: Vector3::splat(Vec3::Z),
+        // The shading points: uv only, with placeholder tangents and normal, unless a lane's
+        // model reads them (`Scene::shading_point`).
+        let reads_frame = lanes_of(going).any(|k| scene.bsdf_reads_surface_frame(bsdf_of[k]));
+        let sp = if reads_frame {
+            ShadingPointR {
+                uv: its.uv,
+                dp_du: its.frame.to_local(its.dp_du),
+                dp_dv: its.frame.to_local(its.dp_dv),
+                n: its.frame.to_local(its.n),
+            }
+        } else {
+            ShadingPointR {
+                uv: its.uv,
+                dp_du: Vector3::splat(Vec3::X),
+                dp_dv: Vector3::splat(Vec3::Y),
+                n: Vector3::splat(Vec3::Z),
+            }
         };
         let mut asks = 0u32;
         let mut u_sel = f32x16::splat(0.5);

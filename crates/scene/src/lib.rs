@@ -319,6 +319,12 @@ impl Scene {
         }
     }
 
+    /// [`Bsdf::reads_surface_frame`] of BSDF `bsdf` (by index).
+    #[inline(always)]
+    pub fn bsdf_reads_surface_frame(&self, bsdf: u32) -> bool {
+        self.reads_surface_frame[bsdf as usize]
+    }
+
     /// The environment when it is an image (`envmap`): the packet loop looks up its lanes'
     /// escaped rays in it together ([`emitter::Envmap::eval_pdfs`]).
     #[inline]
