@@ -172,10 +172,33 @@ fn random_nested(rng: &mut Pcg32, depth: u32) -> Bsdf {
     }
 }
 
+/// [`direction`]s, and rarely what a packet's idle lanes may hold: zero, NaN and infinite
+/// vectors.
+fn lane_direction(rng: &mut Pcg32) -> Vec3 {
+    match rng.random_range(0..400) {
+        0..4 => Vec3::ZERO,
+        4 | 5 => Vec3::NAN,
+        6 => Vec3::new(f32::INFINITY, 0.0, -f32::INFINITY),
+        _ => direction(rng),
+    }
+}
+
 /// A shading point at a random uv, with the parametrisation's tangents and the geometric
-/// normal of a random (possibly skewed or degenerate) surface around the shading frame.
+/// normal of a random (possibly skewed or degenerate) surface around the shading frame;
+/// rarely an idle lane's NaN.
 fn random_shading_point(rng: &mut Pcg32) -> ShadingPoint {
-    let uv = Vec2::new(rng.random_range(-1.0..2.0), rng.random_range(-1.0..2.0));
+    if rng.random_range(0..200) == 0 {
+        return ShadingPoint {
+            uv: Vec2::NAN,
+            dp_du: Vec3::NAN,
+            dp_dv: Vec3::NAN,
+            n: Vec3::NAN,
+        };
+    }
+    let uv = match rng.random_range(0..100) {
+        0 => Vec2::NAN,
+        _ => Vec2::new(rng.random_range(-1.0..2.0), rng.random_range(-1.0..2.0)),
+    };
     if rng.random_range(0..4) == 0 {
         return ShadingPoint::at_uv(uv);
     }
@@ -224,12 +247,12 @@ fn compare(b: &Bsdf, rng: &mut Pcg32, counts: &mut Counts) {
     let (mut u1, mut u2) = ([0.0f32; 16], [Vec2::ZERO; 16]);
     for k in 0..16 {
         sp[k] = random_shading_point(rng);
-        wi[k] = direction(rng);
+        wi[k] = lane_direction(rng);
         wo[k] = match rng.random_range(0..5) {
             0 => -wi[k],
             1 => Vec3::new(-wi[k].x, -wi[k].y, wi[k].z),
             2 => wi[k],
-            _ => direction(rng),
+            _ => lane_direction(rng),
         };
         u1[k] = random_u(rng);
         u2[k] = Vec2::new(random_u(rng), random_u(rng));
@@ -361,10 +384,12 @@ fn nested_and_principled_lanes_are_the_one_path_bit_for_bit() {
         }
     }
     let c = &counts;
+    // Not a vacuous pass: many lanes sample and evaluate to something (directions below
+    // one-sided models, masks of opacity 0, bump maps without a gradient give nothing).
     assert!(
         c.sampled * 3 > c.lanes
-            && c.nonzero * 3 > c.smooth
-            && c.dense * 3 > c.smooth
+            && c.nonzero * 4 > c.smooth
+            && c.dense * 4 > c.smooth
             && c.null * 20 > c.sampled,
         "{c:?}"
     );
