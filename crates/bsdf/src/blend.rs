@@ -222,6 +222,7 @@ impl Blend {
             eta: s.eta,
             valid: s.valid & (s.delta | smooth_ok),
             delta: s.delta,
+            null: s.null,
         }
     }
 }

@@ -22,9 +22,11 @@
 //! the frame about its normal); radia uses the local ∂p/∂u, which matters only for
 //! anisotropic nested models.
 
-use crate::perturbed::{self, frame_from, PerturbOptions};
-use crate::{Bsdf, BsdfSample, LobeFlags, ShadingPoint, Texture};
+use crate::nested::{Lanes, Nested, OnePath, Want};
+use crate::perturbed::{self, frame_from, PerturbOptions, Perturbed};
+use crate::{Bsdf, BsdfSample, BsdfSampleR, LobeFlags, ShadingPoint, ShadingPointR, Texture};
 use glam::{Vec2, Vec3};
+use radia_math::real::{Real, Vector2, Vector3};
 use radia_math::{Frame, Spectrum};
 
 #[derive(Clone, Debug)]
@@ -53,34 +55,107 @@ impl BumpMap {
     /// The bumped frame relative to the shading frame (Mitsuba's `frame()`).
     #[inline]
     pub(crate) fn frame(&self, sp: &ShadingPoint, wi: Vec3) -> Option<Frame> {
-        let grad = self.height.eval_1_grad(sp)? * self.scale;
-        let dp_du = sp.dp_du + Vec3::Z * (grad.x - sp.dp_du.z);
-        let dp_dv = sp.dp_dv + Vec3::Z * (grad.y - sp.dp_dv.z);
-        let mut n = dp_du.cross(dp_dv).normalize();
-        if sp.n.dot(n) < 0.0 {
-            n = -n;
-        }
-        frame_from(self.options.flip(n, wi), sp.dp_du)
+        self.frame_r::<f32>(&sp.into(), wi.into())?.one_path()
+    }
+
+    /// [`BumpMap::frame`] over any [`Real`]; None for a height without a gradient.
+    #[inline(always)]
+    fn frame_r<R: Real>(&self, sp: &ShadingPointR<R>, wi: Vector3<R>) -> Option<Perturbed<R>> {
+        let grad = self.height.eval_1_grad_r(sp)?;
+        let scale = R::splat(self.scale);
+        let (gu, gv) = (grad.x * scale, grad.y * scale);
+        let z = Vector3::splat(Vec3::Z);
+        let dp_du = sp.dp_du + z * (gu - sp.dp_du.z);
+        let dp_dv = sp.dp_dv + z * (gv - sp.dp_dv.z);
+        let n = dp_du.cross(dp_dv).normalize();
+        let back = sp.n.dot(n).less(R::zero());
+        let n = Vector3::new(
+            n.x.negate_where(back),
+            n.y.negate_where(back),
+            n.z.negate_where(back),
+        );
+        Some(frame_from(self.options.flip(n, wi), sp.dp_du))
     }
 
     #[inline]
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
-        match self.frame(sp, wi) {
-            Some(f) => perturbed::eval(&self.nested, &f, self.options, sp, wi, wo),
-            None => Spectrum::ZERO,
-        }
+        let n = OnePath::new(Want::Eval);
+        self.eval_pdf_with(&n, &sp.into(), wi.into(), wo.into())
+            .0
+            .into()
     }
 
     #[inline]
     pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        self.frame(sp, wi)
-            .map_or(0.0, |f| perturbed::pdf(&self.nested, &f, sp, wi, wo))
+        let n = OnePath::new(Want::Pdf);
+        self.eval_pdf_with(&n, &sp.into(), wi.into(), wo.into()).1
+    }
+
+    /// [`BumpMap::eval`] and [`BumpMap::pdf`] at once (the frame made once).
+    #[inline]
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let n = OnePath::new(Want::Both);
+        let (f, pdf) = self.eval_pdf_with(&n, &sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
     }
 
     #[inline]
     pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
-        let f = self.frame(sp, wi)?;
-        perturbed::sample(&self.nested, &f, self.options, sp, wi, u1, u2)
+        let n = OnePath::new(Want::Both);
+        let s = self.sample_with(&n, &sp.into(), wi.into(), u1, u2.into());
+        s.one_path(n.lobe())
+    }
+
+    /// eval and pdf over any [`Real`], where the nested model has lane versions.
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        self.eval_pdf_with(&Lanes, sp, wi, wo)
+    }
+
+    /// sample over any [`Real`], where the nested model has lane versions.
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        self.sample_with(&Lanes, sp, wi, u1, u2)
+    }
+
+    #[inline(always)]
+    fn eval_pdf_with<R: Real, N: Nested<R>>(
+        &self,
+        n: &N,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        match self.frame_r(sp, wi) {
+            Some(p) => perturbed::eval_pdf(n, &self.nested, &p, self.options, sp, wi, wo),
+            None => (Vector3::zero(), R::zero()),
+        }
+    }
+
+    #[inline(always)]
+    fn sample_with<R: Real, N: Nested<R>>(
+        &self,
+        n: &N,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        match self.frame_r(sp, wi) {
+            Some(p) => perturbed::sample(n, &self.nested, &p, self.options, sp, wi, u1, u2),
+            None => BsdfSampleR::none(),
+        }
     }
 }
 

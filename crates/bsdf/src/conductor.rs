@@ -94,6 +94,7 @@ impl Conductor {
             eta: R::one(),
             valid: wi.z.greater(R::zero()),
             delta: R::Mask::splat(true),
+            null: R::Mask::splat(false),
         }
     }
 }

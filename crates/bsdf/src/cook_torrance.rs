@@ -351,6 +351,7 @@ impl CookTorrance {
                 eta: one,
                 valid: valid & ms.valid,
                 delta: R::Mask::splat(false),
+                null: R::Mask::splat(false),
             },
             _ => BsdfSampleR::none(),
         };

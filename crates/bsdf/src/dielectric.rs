@@ -112,6 +112,7 @@ impl Dielectric {
             eta: R::select(reflected, R::one(), fr.eta_it),
             valid: wi.is_finite(),
             delta: R::Mask::splat(true),
+            null: R::Mask::splat(false),
         };
         (s, reflected)
     }

@@ -95,6 +95,7 @@ impl Diffuse {
             eta: R::one(),
             valid: wi.z.greater(R::zero()) & pdf.greater(R::zero()),
             delta: R::Mask::splat(false),
+            null: R::Mask::splat(false),
         }
     }
 }

@@ -259,6 +259,9 @@ pub struct BsdfSampleR<R: Real> {
     pub valid: R::Mask,
     /// Lanes whose sample came from a delta lobe.
     pub delta: R::Mask,
+    /// Lanes whose sample is a null lobe's ([`LobeFlags::NULL`]: straight on, wo = −wi,
+    /// weight 1), delta as well: the path goes on from where it last scattered.
+    pub null: R::Mask,
 }
 
 impl<R: Real> BsdfSampleR<R> {
@@ -272,6 +275,7 @@ impl<R: Real> BsdfSampleR<R> {
             eta: R::one(),
             valid: R::Mask::splat(false),
             delta: R::Mask::splat(false),
+            null: R::Mask::splat(false),
         }
     }
 }
@@ -287,6 +291,7 @@ impl<R: Real> radia_math::real::Select<R> for BsdfSampleR<R> {
             eta: R::select(m, if_true.eta, if_false.eta),
             valid: (m & if_true.valid) | (!m & if_false.valid),
             delta: (m & if_true.delta) | (!m & if_false.delta),
+            null: (m & if_true.null) | (!m & if_false.null),
         }
     }
 }
@@ -483,7 +488,10 @@ impl Bsdf {
             Bsdf::CookTorrance(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::PrincipledThin(m) => m.eval_pdf(sp, wi, wo),
             Bsdf::Blend(m) => m.eval_pdf(sp, wi, wo),
-            _ => (self.eval(sp, wi, wo), self.pdf(sp, wi, wo)),
+            Bsdf::NormalMap(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::BumpMap(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::Mask(m) => m.eval_pdf(sp, wi, wo),
+            Bsdf::Null(m) => m.eval_pdf(sp, wi, wo),
         }
     }
 }
@@ -492,9 +500,11 @@ impl Bsdf {
 /// once (`radia_render::wavefront`); for one path they give what [`Bsdf::eval_pdf`] and
 /// [`Bsdf::sample`] give, bit for bit (the one-path functions call them).
 impl Bsdf {
-    /// Whether [`Bsdf::eval_pdf_r`] and [`Bsdf::sample_r`] have this model (`None` from
-    /// them otherwise: the packet loop runs those paths one at a time). A model that nests
-    /// others has them if its nested models do.
+    /// Whether the packet loop runs this model's lanes through [`Bsdf::eval_pdf_r`] and
+    /// [`Bsdf::sample_r`] (it runs the other paths one at a time): the models written over
+    /// [`Real`] ([`Bsdf::written_r`]) but those that may sample a null lobe (`mask`, `null`
+    /// and what nests them), whose null samples ([`BsdfSampleR::null`]) the packet loop
+    /// does not follow yet. A model that nests others has lanes if its nested models do.
     #[inline]
     pub fn has_r(&self) -> bool {
         if let Bsdf::TwoSided(m) = self {
@@ -523,7 +533,24 @@ impl Bsdf {
     fn nested_has_r(&self) -> bool {
         match self {
             Bsdf::Blend(m) => m.bsdfs.iter().all(Bsdf::has_r),
+            Bsdf::NormalMap(m) => m.nested.has_r(),
+            Bsdf::BumpMap(m) => m.nested.has_r(),
+            // Written over Real, but with a null lobe (see above).
+            Bsdf::Mask(_) | Bsdf::Null(_) => false,
             _ => false,
+        }
+    }
+
+    /// Whether [`Bsdf::eval_pdf_r`] and [`Bsdf::sample_r`] have this model (`None` from
+    /// them otherwise): [`Bsdf::has_r`]'s models, and those with a null lobe.
+    pub fn written_r(&self) -> bool {
+        match self {
+            Bsdf::Null(_) => true,
+            Bsdf::Mask(m) => m.nested.written_r(),
+            Bsdf::Blend(m) => m.bsdfs.iter().all(Bsdf::written_r),
+            Bsdf::NormalMap(m) => m.nested.written_r(),
+            Bsdf::BumpMap(m) => m.nested.written_r(),
+            _ => self.has_r(),
         }
     }
 
@@ -550,7 +577,11 @@ impl Bsdf {
             Bsdf::TwoSided(m) => m.eval_pdf_r(sp, wi, wo),
             Bsdf::Principled(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::PrincipledThin(m) => Some(m.eval_pdf_r(sp, wi, wo)),
-            Bsdf::Blend(m) if self.has_r() => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::Blend(m) if self.written_r() => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::NormalMap(m) if self.written_r() => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::BumpMap(m) if self.written_r() => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::Mask(m) if self.written_r() => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::Null(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             _ => None,
         }
     }
@@ -579,7 +610,11 @@ impl Bsdf {
             Bsdf::TwoSided(m) => m.sample_r(sp, wi, u1, u2),
             Bsdf::Principled(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::PrincipledThin(m) => Some(m.sample_r(sp, wi, u1, u2)),
-            Bsdf::Blend(m) if self.has_r() => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::Blend(m) if self.written_r() => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::NormalMap(m) if self.written_r() => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::BumpMap(m) if self.written_r() => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::Mask(m) if self.written_r() => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::Null(m) => Some(m.sample_r(sp, wi, u1, u2)),
             _ => None,
         }
     }
@@ -607,6 +642,7 @@ pub(crate) fn mixture_sample_r<R: Real>(
         eta: R::one(),
         valid,
         delta: R::Mask::splat(false),
+        null: R::Mask::splat(false),
     }
 }
 

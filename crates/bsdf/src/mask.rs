@@ -39,10 +39,16 @@
 //! behind null crossings against next-event estimation from the last scattering vertex
 //! before them. Each strategy's weights still sum to one per path, so area-lit images have
 //! Mitsuba's expectation, and point lights shine through cut-outs as they physically do.
+//!
+//! Written once over [`Real`] (`eval_pdf_r`, `sample_r`), the nested model queried through
+//! `nested.rs`'s [`Nested`]; a lane's opacity comes from the texture at its point, and its
+//! null samples are marked [`BsdfSampleR::null`].
 
+use crate::nested::{Lanes, Nested, OnePath, Want};
 use crate::null::pass_through;
-use crate::{Bsdf, BsdfSample, LobeFlags, ShadingPoint, Texture};
+use crate::{Bsdf, BsdfSample, BsdfSampleR, LobeFlags, ShadingPoint, ShadingPointR, Texture};
 use glam::{Vec2, Vec3};
+use radia_math::real::{select_lazy, Mask as _, Real, Vector2, Vector3};
 use radia_math::Spectrum;
 
 #[derive(Clone, Debug)]
@@ -76,14 +82,17 @@ impl Mask {
     /// α at `sp`, clamped to [0, 1] (`mask.cpp`'s `eval_opacity`); NaN is transparent.
     #[inline]
     pub(crate) fn opacity_at(&self, sp: &ShadingPoint) -> f32 {
-        let a = self.opacity.eval_1(sp);
-        if let Some(c) = self.cutoff {
-            return if a >= c { 1.0 } else { 0.0 };
-        }
-        if a.is_nan() {
-            0.0
-        } else {
-            a.clamp(0.0, 1.0)
+        self.opacity_r(&sp.into())
+    }
+
+    /// [`Mask::opacity_at`] over any [`Real`].
+    #[inline(always)]
+    fn opacity_r<R: Real>(&self, sp: &ShadingPointR<R>) -> R {
+        let (zero, one) = (R::zero(), R::one());
+        let a = self.opacity.eval_1_r(sp);
+        match self.cutoff {
+            Some(c) => R::select(a.greater_eq(R::splat(c)), one, zero),
+            None => R::select(a.equals(a), a.clamp(zero, one), zero),
         }
     }
 
@@ -93,32 +102,103 @@ impl Mask {
 
     #[inline]
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
-        let a = self.opacity_at(sp);
-        if a == 0.0 {
-            return Spectrum::ZERO;
-        }
-        self.nested.eval(sp, wi, wo) * a
+        let n = OnePath::new(Want::Eval);
+        let (f, _) = self.eval_pdf_with(&n, &sp.into(), wi.into(), wo.into());
+        f.into()
     }
 
     #[inline]
     pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        let a = self.opacity_at(sp);
-        if a == 0.0 {
-            return 0.0;
-        }
-        self.nested.pdf(sp, wi, wo) * a
+        let n = OnePath::new(Want::Pdf);
+        self.eval_pdf_with(&n, &sp.into(), wi.into(), wo.into()).1
+    }
+
+    /// [`Mask::eval`] and [`Mask::pdf`] at once (the nested model's `eval_pdf`).
+    #[inline]
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let n = OnePath::new(Want::Both);
+        let (f, pdf) = self.eval_pdf_with(&n, &sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
     }
 
     #[inline]
     pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
-        let a = self.opacity_at(sp);
-        // mask.cpp: the nested BSDF where sample1 < opacity, with sample1 / opacity.
-        if u1 < a {
-            let mut s = self.nested.sample(sp, wi, (u1 / a).min(1.0), u2)?;
-            s.pdf *= a;
-            return Some(s);
+        let n = OnePath::new(Want::Both);
+        let s = self.sample_with(&n, &sp.into(), wi.into(), u1, u2.into());
+        s.one_path(if s.null { LobeFlags::NULL } else { n.lobe() })
+    }
+
+    /// eval and pdf over any [`Real`], where the nested model has lane versions.
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        self.eval_pdf_with(&Lanes, sp, wi, wo)
+    }
+
+    /// sample over any [`Real`], where the nested model has lane versions: the null lobe's
+    /// lanes are marked [`BsdfSampleR::null`].
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        self.sample_with(&Lanes, sp, wi, u1, u2)
+    }
+
+    /// α times the nested model's eval and pdf (0 where α is, the model not queried if no
+    /// lane needs it).
+    #[inline(always)]
+    fn eval_pdf_with<R: Real, N: Nested<R>>(
+        &self,
+        n: &N,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        let zero = R::zero();
+        let a = self.opacity_r(sp);
+        let on = !a.equals(zero);
+        if !on.any() {
+            return (Vector3::zero(), zero);
         }
-        Some(pass_through(wi, 1.0 - a))
+        let (f, pdf) = n.eval_pdf(&self.nested, sp, wi, wo);
+        (
+            Vector3::select(on, f * a, Vector3::zero()),
+            R::select(on, pdf * a, zero),
+        )
+    }
+
+    /// mask.cpp: the nested model where u1 < opacity (u1 / opacity reused, its pdf times
+    /// the opacity), the null lobe elsewhere.
+    #[inline(always)]
+    fn sample_with<R: Real, N: Nested<R>>(
+        &self,
+        n: &N,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        let one = R::one();
+        let a = self.opacity_r(sp);
+        select_lazy(
+            u1.less(a),
+            || {
+                let s = n.sample(&self.nested, sp, wi, (u1 / a).min(one), u2);
+                BsdfSampleR {
+                    pdf: s.pdf * a,
+                    ..s
+                }
+            },
+            || pass_through(wi, one - a),
+        )
     }
 
     /// The fraction of light that passes straight through at `sp`.

@@ -100,6 +100,7 @@ impl Nested<f32> for OnePath {
                     eta: s.eta,
                     valid: true,
                     delta: s.lobe.is_delta(),
+                    null: s.lobe.is_null(),
                 }
             }
             None => BsdfSampleR::none(),
@@ -135,5 +136,3 @@ impl<R: Real> Nested<R> for Lanes {
         b.sample_r(sp, wi, u1, u2).expect("a nested lane model")
     }
 }
-
-

@@ -15,9 +15,11 @@
 //! orthogonal to n, t = n × s. The nested BSDF is evaluated in that frame (see
 //! `perturbed.rs` for the side checks and the shadowing term).
 
-use crate::perturbed::{self, frame_from, PerturbOptions};
-use crate::{Bsdf, BsdfSample, LobeFlags, ShadingPoint, Texture};
+use crate::nested::{Lanes, Nested, OnePath, Want};
+use crate::perturbed::{self, frame_from, PerturbOptions, Perturbed};
+use crate::{Bsdf, BsdfSample, BsdfSampleR, LobeFlags, ShadingPoint, ShadingPointR, Texture};
 use glam::{Vec2, Vec3};
+use radia_math::real::{Real, Vector2, Vector3};
 use radia_math::{Frame, Spectrum};
 
 #[derive(Clone, Debug)]
@@ -44,28 +46,91 @@ impl NormalMap {
     /// The perturbed frame relative to the shading frame (Mitsuba's `frame()`, first part).
     #[inline]
     pub(crate) fn frame(&self, sp: &ShadingPoint, wi: Vec3) -> Option<Frame> {
-        let n = self.normalmap.eval(sp) * 2.0 - Vec3::ONE;
-        frame_from(self.options.flip(n, wi), Vec3::X)
+        self.frame_r::<f32>(&sp.into(), wi.into()).one_path()
+    }
+
+    /// [`NormalMap::frame`] over any [`Real`].
+    #[inline(always)]
+    fn frame_r<R: Real>(&self, sp: &ShadingPointR<R>, wi: Vector3<R>) -> Perturbed<R> {
+        let n = self.normalmap.eval_r(sp) * R::splat(2.0) - Vector3::splat(Vec3::ONE);
+        frame_from(self.options.flip(n, wi), Vector3::splat(Vec3::X))
     }
 
     #[inline]
     pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
-        match self.frame(sp, wi) {
-            Some(f) => perturbed::eval(&self.nested, &f, self.options, sp, wi, wo),
-            None => Spectrum::ZERO,
-        }
+        let n = OnePath::new(Want::Eval);
+        self.eval_pdf_with(&n, &sp.into(), wi.into(), wo.into())
+            .0
+            .into()
     }
 
     #[inline]
     pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
-        self.frame(sp, wi)
-            .map_or(0.0, |f| perturbed::pdf(&self.nested, &f, sp, wi, wo))
+        let n = OnePath::new(Want::Pdf);
+        self.eval_pdf_with(&n, &sp.into(), wi.into(), wo.into()).1
+    }
+
+    /// [`NormalMap::eval`] and [`NormalMap::pdf`] at once (the frame made once).
+    #[inline]
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let n = OnePath::new(Want::Both);
+        let (f, pdf) = self.eval_pdf_with(&n, &sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
     }
 
     #[inline]
     pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
-        let f = self.frame(sp, wi)?;
-        perturbed::sample(&self.nested, &f, self.options, sp, wi, u1, u2)
+        let n = OnePath::new(Want::Both);
+        let s = self.sample_with(&n, &sp.into(), wi.into(), u1, u2.into());
+        s.one_path(n.lobe())
+    }
+
+    /// eval and pdf over any [`Real`], where the nested model has lane versions.
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        self.eval_pdf_with(&Lanes, sp, wi, wo)
+    }
+
+    /// sample over any [`Real`], where the nested model has lane versions.
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        self.sample_with(&Lanes, sp, wi, u1, u2)
+    }
+
+    #[inline(always)]
+    fn eval_pdf_with<R: Real, N: Nested<R>>(
+        &self,
+        n: &N,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        let p = self.frame_r(sp, wi);
+        perturbed::eval_pdf(n, &self.nested, &p, self.options, sp, wi, wo)
+    }
+
+    #[inline(always)]
+    fn sample_with<R: Real, N: Nested<R>>(
+        &self,
+        n: &N,
+        sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        u1: R,
+        u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        let p = self.frame_r(sp, wi);
+        perturbed::sample(n, &self.nested, &p, self.options, sp, wi, u1, u2)
     }
 }
 
@@ -73,7 +138,7 @@ impl NormalMap {
 mod tests {
     use super::*;
     use crate::microfacet::MicrofacetType;
-    use crate::perturbed::shadow_terminator;
+    use crate::perturbed::shadow_terminator_1 as shadow_terminator;
     use crate::testing::*;
     use crate::MicrofacetDistribution;
     use crate::{Diffuse, RoughConductor};

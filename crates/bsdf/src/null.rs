@@ -12,9 +12,13 @@
 //! A path that crosses a null surface keeps its previous scattering vertex for MIS and
 //! counts the crossing as a bounce against `max_depth`, as Mitsuba's `path.cpp` does
 //! (`depth += 1` after every sample, the null one included).
+//!
+//! Written over [`Real`] (`eval_pdf_r`, `sample_r`) as the other models; its lane samples
+//! are marked `null` ([`BsdfSampleR::null`]).
 
-use crate::{BsdfSample, LobeFlags, ShadingPoint};
+use crate::{BsdfSample, BsdfSampleR, LobeFlags, ShadingPoint, ShadingPointR};
 use glam::{Vec2, Vec3};
+use radia_math::real::{Mask, Real, Vector2, Vector3};
 use radia_math::Spectrum;
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -26,31 +30,64 @@ impl Null {
     }
 
     #[inline]
-    pub fn eval(&self, _sp: &ShadingPoint, _wi: Vec3, _wo: Vec3) -> Spectrum {
-        Spectrum::ZERO
+    pub fn eval(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> Spectrum {
+        self.eval_pdf(sp, wi, wo).0
     }
 
     #[inline]
-    pub fn pdf(&self, _sp: &ShadingPoint, _wi: Vec3, _wo: Vec3) -> f32 {
-        0.0
+    pub fn pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> f32 {
+        self.eval_pdf(sp, wi, wo).1
     }
 
     #[inline]
-    pub fn sample(&self, _sp: &ShadingPoint, wi: Vec3, _u1: f32, _u2: Vec2) -> Option<BsdfSample> {
-        Some(pass_through(wi, 1.0))
+    pub fn eval_pdf(&self, sp: &ShadingPoint, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        let (f, pdf) = self.eval_pdf_r(&sp.into(), wi.into(), wo.into());
+        (f.into(), pdf)
+    }
+
+    #[inline]
+    pub fn sample(&self, sp: &ShadingPoint, wi: Vec3, u1: f32, u2: Vec2) -> Option<BsdfSample> {
+        self.sample_r(&sp.into(), wi.into(), u1, u2.into())
+            .one_path(LobeFlags::NULL)
+    }
+
+    /// eval and pdf over any [`Real`]: zero (a null lobe only).
+    #[inline(always)]
+    pub fn eval_pdf_r<R: Real>(
+        &self,
+        _sp: &ShadingPointR<R>,
+        _wi: Vector3<R>,
+        _wo: Vector3<R>,
+    ) -> (Vector3<R>, R) {
+        (Vector3::zero(), R::zero())
+    }
+
+    /// sample over any [`Real`]: straight on, always.
+    #[inline(always)]
+    pub fn sample_r<R: Real>(
+        &self,
+        _sp: &ShadingPointR<R>,
+        wi: Vector3<R>,
+        _u1: R,
+        _u2: Vector2<R>,
+    ) -> BsdfSampleR<R> {
+        pass_through(wi, R::one())
     }
 }
 
 /// The sample of a null lobe chosen with probability `pdf`: straight on, weight 1 (the
-/// lobe's contribution `pdf` over the probability `pdf` of choosing it).
-#[inline]
-pub(crate) fn pass_through(wi: Vec3, pdf: f32) -> BsdfSample {
-    BsdfSample {
+/// lobe's contribution `pdf` over the probability `pdf` of choosing it), delta and null.
+#[inline(always)]
+pub(crate) fn pass_through<R: Real>(wi: Vector3<R>, pdf: R) -> BsdfSampleR<R> {
+    let yes = R::Mask::splat(true);
+    BsdfSampleR {
         wo: -wi,
-        weight: Spectrum::ONE,
+        weight: Vector3::splat_lanes(R::one()),
         pdf,
-        eta: 1.0,
-        lobe: LobeFlags::NULL,
+        eta: R::one(),
+        valid: yes,
+        delta: yes,
+        null: yes,
     }
 }
 

@@ -211,6 +211,7 @@ impl Plastic {
             // A chosen specular lobe has u1 < its probability, so a positive density.
             valid: wi.z.greater(zero) & prob_specular.is_finite() & pdf.greater(zero),
             delta: specular,
+            null: R::Mask::splat(false),
         }
     }
 }

@@ -720,6 +720,7 @@ impl Principled {
                 eta: R::select(is_trans, fr.eta_it, one),
                 valid: valid & weight.is_finite(),
                 delta: no,
+                null: no,
             },
             diffuse: is_diffuse,
             transmission: is_trans,

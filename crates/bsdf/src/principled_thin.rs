@@ -542,6 +542,7 @@ impl PrincipledThin {
                 eta: R::one(),
                 valid: valid & weight.is_finite(),
                 delta: no,
+                null: no,
             },
             ThinLobe {
                 spec_reflect: is_sr,

@@ -275,6 +275,7 @@ impl RoughConductor {
             eta: R::one(),
             valid: s.valid,
             delta: R::Mask::splat(false),
+            null: R::Mask::splat(false),
         }
     }
 }

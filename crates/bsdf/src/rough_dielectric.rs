@@ -356,6 +356,7 @@ impl RoughDielectric {
             eta,
             valid,
             delta: R::Mask::splat(false),
+            null: R::Mask::splat(false),
         };
         (s, reflected)
     }

@@ -353,6 +353,7 @@ impl RoughPlastic {
             eta: R::one(),
             valid: valid & pdf.greater(zero) & weight.is_finite(),
             delta: R::Mask::splat(false),
+            null: R::Mask::splat(false),
         };
         (s, specular)
     }

@@ -124,6 +124,7 @@ impl ThinDielectric {
             eta: R::one(),
             valid: wi.is_finite(),
             delta: R::Mask::splat(true),
+            null: R::Mask::splat(false),
         };
         (s, reflected)
     }

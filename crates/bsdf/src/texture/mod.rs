@@ -18,7 +18,7 @@
 
 use crate::{ShadingPoint, ShadingPointR};
 use glam::Vec2;
-use radia_math::real::{Real, Vector3};
+use radia_math::real::{Real, Vector2, Vector3};
 use radia_math::Spectrum;
 use std::sync::Arc;
 
@@ -66,7 +66,7 @@ impl Texture {
     pub fn eval_r<R: Real>(&self, sp: &ShadingPointR<R>) -> Vector3<R> {
         match self {
             Texture::Constant(c) => Vector3::splat(*c),
-            _ => Vector3::from_fn(|k| self.eval(&sp.lane(k))),
+            _ => lanes_3(|k| self.eval(&sp.lane(k))),
         }
     }
 
@@ -101,6 +101,17 @@ impl Texture {
         match self {
             Texture::Constant(_) => Some(Vec2::ZERO),
             Texture::Bitmap(b) => Some(b.eval_1_grad(sp.uv)),
+            Texture::Checkerboard(_) => None,
+        }
+    }
+
+    /// [`Texture::eval_1_grad`] over any [`Real`]: zero for a constant, an image's looked up
+    /// lane by lane; `None` for a texture that has no gradient.
+    #[inline(always)]
+    pub fn eval_1_grad_r<R: Real>(&self, sp: &ShadingPointR<R>) -> Option<Vector2<R>> {
+        match self {
+            Texture::Constant(_) => Some(Vector2::new(R::zero(), R::zero())),
+            Texture::Bitmap(b) => Some(lanes_2(|k| b.eval_1_grad(sp.uv.lane(k)))),
             Texture::Checkerboard(_) => None,
         }
     }
@@ -148,6 +159,28 @@ impl Texture {
             Texture::Constant(c) => Some(*c),
             _ => None,
         }
+    }
+}
+
+/// `Vector3::from_fn(f)`, for one path without its array of sixteen lanes, which was not
+/// optimized away (through `Vector2::from_fn`, a bump map's one-path eval took 1.2x the
+/// time).
+#[inline(always)]
+fn lanes_3<R: Real>(mut f: impl FnMut(usize) -> Spectrum) -> Vector3<R> {
+    if R::LANES == 1 {
+        Vector3::splat(f(0))
+    } else {
+        Vector3::from_fn(f)
+    }
+}
+
+/// [`lanes_3`] of a 2-vector.
+#[inline(always)]
+fn lanes_2<R: Real>(mut f: impl FnMut(usize) -> Vec2) -> Vector2<R> {
+    if R::LANES == 1 {
+        Vector2::splat(f(0))
+    } else {
+        Vector2::from_fn(f)
     }
 }
 
