@@ -500,11 +500,9 @@ impl Bsdf {
 /// once (`radia_render::wavefront`); for one path they give what [`Bsdf::eval_pdf`] and
 /// [`Bsdf::sample`] give, bit for bit (the one-path functions call them).
 impl Bsdf {
-    /// Whether the packet loop runs this model's lanes through [`Bsdf::eval_pdf_r`] and
-    /// [`Bsdf::sample_r`] (it runs the other paths one at a time): the models written over
-    /// [`Real`] ([`Bsdf::written_r`]) but those that may sample a null lobe (`mask`, `null`
-    /// and what nests them), whose null samples ([`BsdfSampleR::null`]) the packet loop
-    /// does not follow yet. A model that nests others has lanes if its nested models do.
+    /// Whether [`Bsdf::eval_pdf_r`] and [`Bsdf::sample_r`] have this model (`None` from
+    /// them otherwise: the packet loop runs those paths one at a time). A model that nests
+    /// others has them if its nested models do.
     #[inline]
     pub fn has_r(&self) -> bool {
         if let Bsdf::TwoSided(m) = self {
@@ -535,22 +533,9 @@ impl Bsdf {
             Bsdf::Blend(m) => m.bsdfs.iter().all(Bsdf::has_r),
             Bsdf::NormalMap(m) => m.nested.has_r(),
             Bsdf::BumpMap(m) => m.nested.has_r(),
-            // Written over Real, but with a null lobe (see above).
-            Bsdf::Mask(_) | Bsdf::Null(_) => false,
-            _ => false,
-        }
-    }
-
-    /// Whether [`Bsdf::eval_pdf_r`] and [`Bsdf::sample_r`] have this model (`None` from
-    /// them otherwise): [`Bsdf::has_r`]'s models, and those with a null lobe.
-    pub fn written_r(&self) -> bool {
-        match self {
+            Bsdf::Mask(m) => m.nested.has_r(),
             Bsdf::Null(_) => true,
-            Bsdf::Mask(m) => m.nested.written_r(),
-            Bsdf::Blend(m) => m.bsdfs.iter().all(Bsdf::written_r),
-            Bsdf::NormalMap(m) => m.nested.written_r(),
-            Bsdf::BumpMap(m) => m.nested.written_r(),
-            _ => self.has_r(),
+            _ => false,
         }
     }
 
@@ -577,10 +562,10 @@ impl Bsdf {
             Bsdf::TwoSided(m) => m.eval_pdf_r(sp, wi, wo),
             Bsdf::Principled(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::PrincipledThin(m) => Some(m.eval_pdf_r(sp, wi, wo)),
-            Bsdf::Blend(m) if self.written_r() => Some(m.eval_pdf_r(sp, wi, wo)),
-            Bsdf::NormalMap(m) if self.written_r() => Some(m.eval_pdf_r(sp, wi, wo)),
-            Bsdf::BumpMap(m) if self.written_r() => Some(m.eval_pdf_r(sp, wi, wo)),
-            Bsdf::Mask(m) if self.written_r() => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::Blend(m) if self.has_r() => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::NormalMap(m) if self.has_r() => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::BumpMap(m) if self.has_r() => Some(m.eval_pdf_r(sp, wi, wo)),
+            Bsdf::Mask(m) if self.has_r() => Some(m.eval_pdf_r(sp, wi, wo)),
             Bsdf::Null(m) => Some(m.eval_pdf_r(sp, wi, wo)),
             _ => None,
         }
@@ -610,10 +595,10 @@ impl Bsdf {
             Bsdf::TwoSided(m) => m.sample_r(sp, wi, u1, u2),
             Bsdf::Principled(m) => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::PrincipledThin(m) => Some(m.sample_r(sp, wi, u1, u2)),
-            Bsdf::Blend(m) if self.written_r() => Some(m.sample_r(sp, wi, u1, u2)),
-            Bsdf::NormalMap(m) if self.written_r() => Some(m.sample_r(sp, wi, u1, u2)),
-            Bsdf::BumpMap(m) if self.written_r() => Some(m.sample_r(sp, wi, u1, u2)),
-            Bsdf::Mask(m) if self.written_r() => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::Blend(m) if self.has_r() => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::NormalMap(m) if self.has_r() => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::BumpMap(m) if self.has_r() => Some(m.sample_r(sp, wi, u1, u2)),
+            Bsdf::Mask(m) if self.has_r() => Some(m.sample_r(sp, wi, u1, u2)),
             Bsdf::Null(m) => Some(m.sample_r(sp, wi, u1, u2)),
             _ => None,
         }

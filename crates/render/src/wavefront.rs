@@ -661,6 +661,7 @@ fn scatter<S: Sampler>(
     let mut eta = f32x16::ONE;
     let mut valid = 0u32;
     let mut delta = 0u32;
+    let mut null = 0u32;
     for (b, group) in by_material(bsdf_of, lanes) {
         let bs = scene.bsdfs[b as usize]
             .sample_r(sp, its.wi, u1, u2)
@@ -672,6 +673,7 @@ fn scatter<S: Sampler>(
         eta = m.select(bs.eta, eta);
         valid |= group & bs.valid.bits();
         delta |= group & bs.delta.bits();
+        null |= group & bs.null.bits();
     }
     let on = valid & !weight.is_zero().bits();
     let mut ends = lanes & !on;
@@ -681,12 +683,16 @@ fn scatter<S: Sampler>(
     let m = mask(on);
     paths.beta = Vector3::select(m, paths.beta * weight, paths.beta);
     paths.eta = m.select(paths.eta * eta, paths.eta);
-    paths.primary &= !on;
-    paths.prev_p = Vector3::select(m, its.p, paths.prev_p);
-    paths.prev_n = Vector3::select(m, its.frame.n, paths.prev_n);
-    paths.prev_pdf = m.select(pdf, paths.prev_pdf);
-    paths.prev_delta = (paths.prev_delta & !on) | (delta & on);
-    let d = its.frame.to_world(wo);
+    // A null sample goes straight on, exactly along the ray, and is no scattering vertex:
+    // the path stays primary and its previous vertex where it last scattered.
+    let scattered = on & !null;
+    let s = mask(scattered);
+    paths.primary &= !scattered;
+    paths.prev_p = Vector3::select(s, its.p, paths.prev_p);
+    paths.prev_n = Vector3::select(s, its.frame.n, paths.prev_n);
+    paths.prev_pdf = s.select(pdf, paths.prev_pdf);
+    paths.prev_delta = (paths.prev_delta & !scattered) | (delta & scattered);
+    let d = Vector3::select(s, its.frame.to_world(wo), paths.ray_d);
     paths.ray_o = Vector3::select(m, its.spawn_origins(d), paths.ray_o);
     paths.ray_d = Vector3::select(m, d, paths.ray_d);
     paths.ray_t_max = m.select(f32x16::splat(f32::INFINITY), paths.ray_t_max);
