@@ -251,14 +251,23 @@ impl Shape {
         }
     }
 
-    /// Triangle `face` of a flat (no vertex normals) emitting mesh, for light sampling in
-    /// lanes ([`LightTriangles`]); `None` for every other shape, which the scalar
-    /// [`Shape::sample_direction`] samples.
+    /// Triangle `face` of an emitting mesh, for light sampling in lanes
+    /// ([`LightTriangles`]), with its vertex normals and the mesh's `flip_normals` where the
+    /// mesh has vertex normals (what `emitted_normal` interpolates); `None` for every other
+    /// shape, which the scalar [`Shape::sample_direction`] samples.
     #[inline(always)]
-    pub(crate) fn flat_light_triangle(&self, face: u32) -> Option<&LightTriangle> {
+    pub(crate) fn lane_light_triangle(
+        &self,
+        face: u32,
+    ) -> Option<(&LightTriangle, Option<([Vec3; 3], bool)>)> {
         match &self.kind {
-            ShapeKind::Mesh(mesh) if mesh.normals.is_none() => {
-                self.light_triangles.get(face as usize)
+            ShapeKind::Mesh(mesh) => {
+                let t = self.light_triangles.get(face as usize)?;
+                let normals = mesh.normals.as_ref().map(|ns| {
+                    let idx = mesh.indices[face as usize];
+                    (idx.map(|i| ns[i as usize]), mesh.flip_normals)
+                });
+                Some((t, normals))
             }
             _ => None,
         }

@@ -229,7 +229,7 @@ impl Lights {
         };
         let triangles = LightTriangleTable::new(prims.iter().map(|p| {
             match &emitters[p.emitter as usize] {
-                Emitter::Area(a) => shapes[a.shape as usize].flat_light_triangle(p.face),
+                Emitter::Area(a) => shapes[a.shape as usize].lane_light_triangle(p.face),
                 _ => None,
             }
         }));
@@ -440,7 +440,7 @@ impl Scene {
                 Emitter::Area(light) => {
                     if let Texture::Constant(c) = light.radiance {
                         let shape = &self.shapes[light.shape as usize];
-                        let pushed = if shape.flat_light_triangle(prim.face).is_some() {
+                        let pushed = if shape.lane_light_triangle(prim.face).is_some() {
                             triangles.push(k, index as u32);
                             true
                         } else if let Some(sphere) = shape.light_sphere() {

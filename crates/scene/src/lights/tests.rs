@@ -1019,6 +1019,16 @@ fn a_lone_emitting_mesh_is_chosen_from_by_the_tree_and_a_rectangle_by_area() {
 // ---------------------------------------------------------------------------------------
 // Smooth mesh lights: Mitsuba's convention
 
+/// Mesh `g` moved by `offset`, with `flip_normals` set to `flip`.
+fn moved(g: Geometry, offset: Vec3, flip: bool) -> Geometry {
+    let Geometry::Mesh(mut m) = g else { unreachable!() };
+    for p in &mut m.positions {
+        *p += offset;
+    }
+    m.flip_normals = flip;
+    Geometry::Mesh(m)
+}
+
 /// A low cap of three triangles around the z axis, apex up, with vertex normals of a sphere
 /// (bent outwards from each facet's own normal), glowing with radiance 1.
 fn smooth_cap() -> Geometry {
@@ -1409,6 +1419,9 @@ fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
             disk(Vec3::new(0.0, 2.0, 1.0), 0.4, -Vec3::Y),
             Vec3::splat(3.0),
         ),
+        // Meshes with vertex normals (the emitted normal interpolated), one flipped.
+        emitting(moved(smooth_cap(), Vec3::new(1.0, -2.0, 0.5), false), Vec3::splat(1.5)),
+        emitting(moved(smooth_cap(), Vec3::new(-1.5, -1.0, -0.5), true), Vec3::splat(2.5)),
     ];
     let constant = EmitterDesc::Constant {
         radiance: Vec3::splat(0.1),

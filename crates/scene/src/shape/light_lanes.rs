@@ -1,4 +1,4 @@
-//! Light samples on flat mesh triangles, sixteen at once: the area-sampling branch of
+//! Light samples on mesh triangles, sixteen at once: the area-sampling branch of
 //! [`Shape::sample_direction`](super::Shape::sample_direction), which next-event estimation
 //! takes on every emitting triangle that is small seen from the shading point (the common
 //! case: a ceiling light seen from the room).
@@ -25,38 +25,58 @@ type Rows = [[f32; WIDTH]; 3];
 const _: () = assert!(MIN_SPHERICAL_SAMPLE_AREA <= MAX_SPHERICAL_SAMPLE_AREA);
 
 /// The [`LightTriangle`]s of a scene's light primitives by field, indexed by light
-/// primitive (NaN for primitives that are not flat triangles): what [`LightTriangles`]
+/// primitive (NaN for primitives that are not mesh triangles): what [`LightTriangles`]
 /// gathers its lanes' triangles from.
 #[derive(Clone, Debug)]
 pub(crate) struct LightTriangleTable {
-    /// v0, v1, v2, twice_area_n, n, centroid (3 coordinates each), area, r2.
-    fields: [Vec<f32>; 20],
+    /// v0, v1, v2, twice_area_n, n, centroid (3 coordinates each), area, r2, then the
+    /// vertex normals n0, n1, n2 (3 coordinates each; NaN on flat meshes) and the side
+    /// they emit on ([`SIDE`]).
+    fields: [Vec<f32>; 30],
 }
 
+/// The field of [`LightTriangleTable`] that says how a triangle's emitted normal is found:
+/// 0 on a flat mesh (the facet's normal), 1 on a mesh with vertex normals (their
+/// interpolation), -1 there with `flip_normals` (its opposite).
+const SIDE: usize = 29;
+
 impl LightTriangleTable {
-    pub(crate) fn new<'a>(triangles: impl Iterator<Item = Option<&'a LightTriangle>>) -> Self {
-        let mut fields: [Vec<f32>; 20] = std::array::from_fn(|_| Vec::new());
-        for t in triangles {
+    pub(crate) fn new<'a>(
+        triangles: impl Iterator<Item = Option<(&'a LightTriangle, Option<([Vec3; 3], bool)>)>>,
+    ) -> Self {
+        let mut fields: [Vec<f32>; 30] = std::array::from_fn(|_| Vec::new());
+        for entry in triangles {
+            let t = entry.map(|(t, _)| t);
+            let normals = entry.and_then(|(_, normals)| normals);
+            let [n0, n1, n2] = normals.map_or([Vec3::NAN; 3], |(ns, _)| ns);
             let vectors = t.map_or([Vec3::NAN; 6], |t| {
                 [t.v[0], t.v[1], t.v[2], t.twice_area_n, t.n, t.centroid]
             });
-            for (i, v) in vectors.iter().enumerate() {
+            for (i, v) in vectors.iter().chain(&[n0, n1, n2]).enumerate() {
+                let i = if i < 6 { 3 * i } else { 3 * i + 2 };
                 for axis in 0..3 {
-                    fields[3 * i + axis].push(v[axis]);
+                    fields[i + axis].push(v[axis]);
                 }
             }
             fields[18].push(t.map_or(f32::NAN, |t| t.area));
             fields[19].push(t.map_or(f32::NAN, |t| t.r2));
+            fields[SIDE].push(match normals {
+                None => 0.0,
+                Some((_, false)) => 1.0,
+                Some((_, true)) => -1.0,
+            });
         }
         Self { fields }
     }
 
+    /// Vector field `i` (v0, v1, v2, twice_area_n, n, centroid, n0, n1, n2).
     #[inline(always)]
     fn vector(&self, i: usize, index: &[u32; WIDTH]) -> Vec3s {
+        let first = if i < 6 { 3 * i } else { 3 * i + 2 };
         Vec3s {
-            x: gather(&self.fields[3 * i], index),
-            y: gather(&self.fields[3 * i + 1], index),
-            z: gather(&self.fields[3 * i + 2], index),
+            x: gather(&self.fields[first], index),
+            y: gather(&self.fields[first + 1], index),
+            z: gather(&self.fields[first + 2], index),
         }
     }
 }
@@ -105,7 +125,7 @@ impl LightTriangles {
         self.lanes
     }
 
-    /// Lane `k` samples light primitive `index`, a flat triangle.
+    /// Lane `k` samples light primitive `index`, a mesh triangle.
     #[inline(always)]
     pub(crate) fn push(&mut self, k: usize, index: u32) {
         self.lanes |= 1 << k;
@@ -149,12 +169,30 @@ impl LightTriangles {
         let (p, p_error) = triangle_point(v0, e1, e2, b1, b2);
         let pdf_area = f32x16::ONE / gather(&table.fields[18], index);
 
+        // ---- `emitted_normal`: the normal the light glows about ----
+        let side = gather(&table.fields[SIDE], index);
+        let smooth = done & !side.simd_eq(f32x16::ZERO).to_bitmask();
+        let sh_n = if smooth == 0 {
+            n
+        } else {
+            // `vertex_normal`, then flipped with `flip_normals`; the facet's where the
+            // interpolation vanishes.
+            let b0 = f32x16::ONE - b1 - b2;
+            let s = table.vector(6, index).scale(b0)
+                + table.vector(7, index).scale(b1)
+                + table.vector(8, index).scale(b2);
+            let s = s.normalize();
+            let s = Vec3s::select(side.simd_lt(f32x16::ZERO), -s, s);
+            let m = lanes::mask(smooth) & s.is_finite();
+            Vec3s::select(m, s, n)
+        };
+
         // ---- `seen_from`: the density in solid angle ----
         let delta = p - ref_p;
         let dist2 = delta.length_squared();
         let dist = dist2.sqrt();
         let d = delta.div(dist);
-        let cos = n.dot(d);
+        let cos = sh_n.dot(d);
         let pdf = pdf_area * dist2 / cos.abs();
         let finite = pdf.is_finite() & pdf.simd_gt(f32x16::ZERO);
         // The area light's own test: no light seen from behind.
