@@ -15,7 +15,7 @@
 //! (`crates/render/tests/wavefront.rs`). What the lanes do not cover runs
 //! [`PathIntegrator::bounce`] for that lane alone, on its state read out of the packet and
 //! written back: surfaces whose model has no lane version, camera rays under
-//! `hide_emitters` (which may go through emitters). Emission found by a path (rare, and
+//! `hide_emitters` that hit an emitter (they go through it). Emission found by a path (rare, and
 //! needing the light selection's density) is added lane by lane.
 
 use crate::integrator::{CameraSamples, Traced};
@@ -264,15 +264,19 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
 
         // ---- Which lanes step one path at a time ----
         let mut bsdf_of = [0u32; LANES];
-        let mut scalar = if integrator.hide_emitters {
+        // Camera rays that see no emitter (`hide_emitters`): through an area emitter they
+        // go on (`skip_area_emitters`, one path at a time), out of the scene they give 0.
+        let hidden = if integrator.hide_emitters {
             live & paths.primary
         } else {
             0
         };
+        let mut scalar = 0u32;
         for k in lanes_of(live & its.hit) {
-            let b = scene.shapes[its.shape[k] as usize].bsdf;
-            bsdf_of[k] = b;
-            if !lane_models[b as usize] {
+            let shape = &scene.shapes[its.shape[k] as usize];
+            bsdf_of[k] = shape.bsdf;
+            let through = hidden & (1 << k) != 0 && shape.emitter.is_some();
+            if through || !lane_models[shape.bsdf as usize] {
                 scalar |= 1 << k;
             }
         }
@@ -282,16 +286,16 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
 
         // ---- Escaped rays: the environment's emission ----
         let escaped = vector & !its.hit;
-        if escaped != 0 {
+        if escaped & !hidden != 0 {
             environment(
                 integrator,
                 scene,
                 environment_map,
                 &mut paths,
-                escaped,
+                escaped & !hidden,
             );
-            ends |= escaped;
         }
+        ends |= escaped;
 
         // ---- Emission of the surfaces hit ----
         let hit = vector & its.hit;
