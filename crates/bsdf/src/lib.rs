@@ -52,13 +52,12 @@
 //! `principled` and `principledthin` share, Mitsuba's `principledhelpers.h`).
 //!
 //! # One path or sixteen
-//! Most models are written once over [`radia_math::real::Real`] (`eval_pdf_r`, `sample_r`):
-//! `diffuse`, `conductor`, `roughconductor`, `dielectric`, `thindielectric`,
-//! `roughdielectric`, `plastic`, `roughplastic`, `phong`, `blinnphong`, `cooktorrance`, and
-//! `twosided` when both sides are among them ([`Bsdf::has_r`]). Their one-path `eval`, `pdf`,
-//! `eval_pdf` and `sample` are the `f32` instantiation; over `f32x16` each lane gets the same
-//! bits (`lanes_test.rs`). The others (`principled`, `principledthin`, `blendbsdf`,
-//! `normalmap`, `bumpmap`, `mask`, `null`) are one-path only.
+//! Every model is written once over [`radia_math::real::Real`] (`eval_pdf_r`, `sample_r`);
+//! those that nest others (`twosided`, `blendbsdf`, `normalmap`, `bumpmap`, `mask`) have
+//! lanes where their nested models do ([`Bsdf::has_r`]), querying them through `nested.rs`.
+//! Their one-path `eval`, `pdf`, `eval_pdf` and `sample` are the `f32` instantiation; over
+//! `f32x16` each lane gets the same bits (`lanes_test.rs`, `lanes_test_principled.rs`). The
+//! packet loop runs all of them in lanes, null samples ([`BsdfSampleR::null`]) included.
 
 use glam::{Vec2, Vec3};
 use radia_math::real::{Mask as _, Real, Vector2, Vector3};
