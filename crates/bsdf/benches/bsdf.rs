@@ -22,11 +22,11 @@ use radia_bsdf::ior::lookup_conductor;
 use radia_bsdf::microfacet::Shadowing;
 use radia_bsdf::ShadingPointR;
 use radia_bsdf::{
-    Bitmap, BlinnPhong, Blend, Bsdf, BumpMap, Conductor, CookTorrance, CookTorranceFresnel,
-    Diffuse, Dielectric, FilterType, Mask, MicrofacetDistribution, MicrofacetType, NormalMap,
-    Null, PerturbOptions, Phong, Plastic, Principled, PrincipledIor, PrincipledThin,
-    RoughConductor, RoughDielectric, RoughPlastic, ShadingPoint, Texture, ThinDielectric,
-    TwoSided, UvTransform, WrapMode,
+    Bitmap, Blend, BlinnPhong, Bsdf, BumpMap, Conductor, CookTorrance, CookTorranceFresnel,
+    Dielectric, Diffuse, FilterType, Mask, MicrofacetDistribution, MicrofacetType, NormalMap, Null,
+    PerturbOptions, Phong, Plastic, Principled, PrincipledIor, PrincipledThin, RoughConductor,
+    RoughDielectric, RoughPlastic, ShadingPoint, Texture, ThinDielectric, TwoSided, UvTransform,
+    WrapMode,
 };
 use radia_math::real::{f32x16, Real, Vector2, Vector3};
 use radia_sampling::warp::square_to_cosine_hemisphere;

@@ -27,7 +27,9 @@ pub fn luminance(c: Spectrum) -> f32 {
 /// [`luminance`] over any [`real::Real`].
 #[inline(always)]
 pub fn luminance_r<R: real::Real>(c: real::Vector3<R>) -> R {
-    c.dot(real::Vector3::splat(Vec3::new(0.212671, 0.715160, 0.072169)))
+    c.dot(real::Vector3::splat(Vec3::new(
+        0.212671, 0.715160, 0.072169,
+    )))
 }
 
 /// Largest component, as Mitsuba's `dr::max` of a spectrum (used by Russian roulette).
@@ -74,7 +76,9 @@ pub fn coordinate_system(n: Vec3) -> (Vec3, Vec3) {
 
 /// [`coordinate_system`] over any [`real::Real`].
 #[inline(always)]
-pub fn coordinate_system_r<R: real::Real>(n: real::Vector3<R>) -> (real::Vector3<R>, real::Vector3<R>) {
+pub fn coordinate_system_r<R: real::Real>(
+    n: real::Vector3<R>,
+) -> (real::Vector3<R>, real::Vector3<R>) {
     let sign = R::one().copysign(n.z);
     let a = R::splat(-1.0) / (sign + n.z);
     let b = n.x * n.y * a;

@@ -23,8 +23,8 @@
 use glam::{Vec2, Vec3};
 use std::fmt::Debug;
 use std::ops::{
-    Add, AddAssign, BitAnd, BitAndAssign, BitOr, BitOrAssign, Div, DivAssign, Mul, MulAssign,
-    Neg, Not, Sub, SubAssign,
+    Add, AddAssign, BitAnd, BitAndAssign, BitOr, BitOrAssign, Div, DivAssign, Mul, MulAssign, Neg,
+    Not, Sub, SubAssign,
 };
 pub use wide::f32x16;
 
@@ -800,7 +800,13 @@ mod tests {
         let v = values();
         for (i, a) in v.chunks(16).enumerate() {
             let b: Vec<f32> = v.iter().cycle().skip(7 * i + 3).take(16).copied().collect();
-            let c: Vec<f32> = v.iter().cycle().skip(11 * i + 5).take(16).copied().collect();
+            let c: Vec<f32> = v
+                .iter()
+                .cycle()
+                .skip(11 * i + 5)
+                .take(16)
+                .copied()
+                .collect();
             let at = |x: &[f32], k: usize| x.get(k).copied().unwrap_or(0.25);
             let (la, lb, lc) = (
                 f32x16::from_fn(|k| at(a, k)),
@@ -878,7 +884,11 @@ mod tests {
                 ("greater", |a, b| a.greater(b), |a, b| a.greater(b)),
                 ("greater_eq", |a, b| a.greater_eq(b), |a, b| a.greater_eq(b)),
                 ("equals", |a, b| a.equals(b), |a, b| a.equals(b)),
-                ("is_finite", |a, _| Real::is_finite(a), |a, _| Real::is_finite(a)),
+                (
+                    "is_finite",
+                    |a, _| Real::is_finite(a),
+                    |a, _| Real::is_finite(a),
+                ),
                 (
                     "is_sign_negative",
                     |a, _| Real::is_sign_negative(a),
@@ -918,7 +928,13 @@ mod tests {
         let v = values();
         let finite: Vec<f32> = v.into_iter().filter(|x| x.is_finite()).collect();
         for i in 0..finite.len() / 48 {
-            let pick = |j: usize| Vec3::new(finite[48 * i + j], finite[48 * i + 16 + j], finite[48 * i + 32 + j]);
+            let pick = |j: usize| {
+                Vec3::new(
+                    finite[48 * i + j],
+                    finite[48 * i + 16 + j],
+                    finite[48 * i + 32 + j],
+                )
+            };
             let a: Vector3<f32x16> = Vector3::from_fn(pick);
             let b: Vector3<f32x16> = Vector3::from_fn(|j| pick((j + 5) % 16));
             for k in 0..16 {

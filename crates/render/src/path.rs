@@ -105,14 +105,7 @@ impl PathIntegrator {
             stats.rays += 1;
             let hit = scene.intersect(&path.ray);
             let mut shadow = None;
-            let goes_on = self.bounce(
-                scene,
-                &mut path,
-                hit.as_ref(),
-                sampler,
-                stats,
-                &mut shadow,
-            );
+            let goes_on = self.bounce(scene, &mut path, hit.as_ref(), sampler, stats, &mut shadow);
             if let Some(shadow) = &shadow {
                 let transmittance = scene.transmittance(&shadow.ends.ray(), shadow.crossings);
                 shadow.resolve(&mut path, transmittance);
@@ -307,7 +300,11 @@ impl PathIntegrator {
     /// emitter's density from there, which includes the probability that light selection
     /// picks it (not asked for after a delta lobe, which emitter sampling cannot follow).
     #[inline]
-    pub(crate) fn mis_emitter_hit(&self, prev: &PrevVertex, pdf_em: impl FnOnce(&LightContext) -> f32) -> f32 {
+    pub(crate) fn mis_emitter_hit(
+        &self,
+        prev: &PrevVertex,
+        pdf_em: impl FnOnce(&LightContext) -> f32,
+    ) -> f32 {
         if prev.bsdf_delta {
             return 1.0;
         }

@@ -27,9 +27,7 @@ use radia_math::real::{Mask, Real, Vector2, Vector3};
 use radia_math::{Ray, Spectrum};
 use radia_sampling::mis::power_heuristic_r;
 use radia_sampling::{PixelKey, SampleStream, Sampler};
-use radia_scene::{
-    EmitterSampleLanes, RayPacket, Scene, ShadowLanes, SurfaceLanes, PACKET_LANES,
-};
+use radia_scene::{EmitterSampleLanes, RayPacket, Scene, ShadowLanes, SurfaceLanes, PACKET_LANES};
 
 /// Paths in flight per packet.
 pub const LANES: usize = PACKET_LANES;
@@ -97,7 +95,11 @@ impl<'a, S: Sampler> Paths<'a, S> {
     #[inline(always)]
     fn get(&self, k: usize) -> PathState {
         PathState {
-            ray: Ray::new(self.ray_o.lane(k), self.ray_d.lane(k), self.ray_t_max.lane(k)),
+            ray: Ray::new(
+                self.ray_o.lane(k),
+                self.ray_d.lane(k),
+                self.ray_t_max.lane(k),
+            ),
             result: self.result.lane(k),
             beta: self.beta.lane(k),
             eta: self.eta.lane(k),
@@ -477,7 +479,14 @@ fn bounce_values<S: Sampler>(paths: &Paths<'_, S>, lanes: u32) -> Option<[f32x16
     let mut out = [[0.0; LANES]; 8];
     let sampler = paths.stream[0].sampler();
     sampler
-        .get_block_lanes(lanes, &paths.key, &paths.index, &blocks, &paths.prepared, &mut out)
+        .get_block_lanes(
+            lanes,
+            &paths.key,
+            &paths.index,
+            &blocks,
+            &paths.prepared,
+            &mut out,
+        )
         .then(|| out.map(f32x16::new))
 }
 

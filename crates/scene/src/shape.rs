@@ -5,8 +5,8 @@
 mod lanes;
 mod light_lanes;
 
-pub(crate) use lanes::{DiskHits, MeshHits, SphereHits};
 pub use lanes::SurfaceLanes;
+pub(crate) use lanes::{DiskHits, MeshHits, SphereHits};
 pub(crate) use light_lanes::{
     uniform_sphere_directions, LightSpheres, LightTriangleTable, LightTriangles,
 };

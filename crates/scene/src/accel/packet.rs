@@ -547,7 +547,8 @@ mod kernel {
             let from_origin = F16::splat(node.p[a]) - r.o[a];
             scale[a] = F16::splat(step) * r.inv[a];
             let offset = from_origin * r.inv[a];
-            let slack = (from_origin.abs() + F16::splat(step * 255.0)) * r.inv_abs[a]
+            let slack = (from_origin.abs() + F16::splat(step * 255.0))
+                * r.inv_abs[a]
                 * F16::splat(BOX_SLACK);
             o_near[a] = offset - slack;
             o_far[a] = offset + slack;
@@ -637,8 +638,7 @@ mod kernel {
     ) {
         let c = [center.x, center.y, center.z];
         let o: [D8; 3] = std::array::from_fn(|a| (r.o[a] - F16::splat(c[a])).half_to_f64(half));
-        let d: [D8; 3] =
-            std::array::from_fn(|a| F16::load(&r.packet.d[a]).half_to_f64(half));
+        let d: [D8; 3] = std::array::from_fn(|a| F16::load(&r.packet.d[a]).half_to_f64(half));
         let dot = |u: &[D8; 3], v: &[D8; 3]| u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
         let rad = radius as f64;
         let a = dot(&d, &d);
@@ -692,14 +692,9 @@ mod kernel {
             let l = lanes.trailing_zeros() as usize;
             lanes &= lanes - 1;
             let ray = r.ray(l);
-            if let Some((t, bary, inner)) = accel.intersect_prim(
-                shapes,
-                &r.watertight(l),
-                &ray,
-                prim,
-                st.t[l],
-                ANY_HIT,
-            ) {
+            if let Some((t, bary, inner)) =
+                accel.intersect_prim(shapes, &r.watertight(l), &ray, prim, st.t[l], ANY_HIT)
+            {
                 st.record::<ANY_HIT>(l, prim as u32, t, bary, inner);
             }
         }
@@ -935,8 +930,7 @@ mod kernel {
             let octant = fixed_octant.unwrap_or(
                 (((r.neg_bits[0] >> l) & 1) << 2
                     | ((r.neg_bits[1] >> l) & 1) << 1
-                    | ((r.neg_bits[2] >> l) & 1))
-                    as usize,
+                    | ((r.neg_bits[2] >> l) & 1)) as usize,
             );
             for i in (0..8).rev() {
                 let c = i ^ octant;

@@ -227,12 +227,11 @@ impl Lights {
                 LightBvh::build(&lights, bounded_weight).map_or(Selector::Empty, Selector::Bvh)
             }
         };
-        let triangles = LightTriangleTable::new(prims.iter().map(|p| {
-            match &emitters[p.emitter as usize] {
+        let triangles =
+            LightTriangleTable::new(prims.iter().map(|p| match &emitters[p.emitter as usize] {
                 Emitter::Area(a) => shapes[a.shape as usize].lane_light_triangle(p.face),
                 _ => None,
-            }
-        }));
+            }));
         Self {
             prims,
             first_prim,

@@ -1021,7 +1021,9 @@ fn a_lone_emitting_mesh_is_chosen_from_by_the_tree_and_a_rectangle_by_area() {
 
 /// Mesh `g` moved by `offset`, with `flip_normals` set to `flip`.
 fn moved(g: Geometry, offset: Vec3, flip: bool) -> Geometry {
-    let Geometry::Mesh(mut m) = g else { unreachable!() };
+    let Geometry::Mesh(mut m) = g else {
+        unreachable!()
+    };
     for p in &mut m.positions {
         *p += offset;
     }
@@ -1420,8 +1422,14 @@ fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
             Vec3::splat(3.0),
         ),
         // Meshes with vertex normals (the emitted normal interpolated), one flipped.
-        emitting(moved(smooth_cap(), Vec3::new(1.0, -2.0, 0.5), false), Vec3::splat(1.5)),
-        emitting(moved(smooth_cap(), Vec3::new(-1.5, -1.0, -0.5), true), Vec3::splat(2.5)),
+        emitting(
+            moved(smooth_cap(), Vec3::new(1.0, -2.0, 0.5), false),
+            Vec3::splat(1.5),
+        ),
+        emitting(
+            moved(smooth_cap(), Vec3::new(-1.5, -1.0, -0.5), true),
+            Vec3::splat(2.5),
+        ),
     ];
     let constant = EmitterDesc::Constant {
         radiance: Vec3::splat(0.1),
@@ -1490,7 +1498,12 @@ fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
                     } else {
                         stale
                     };
-                    assert_eq!(bits(&out.get(k)), bits(&want), "lane {k} from {:?}", ctx[k].p);
+                    assert_eq!(
+                        bits(&out.get(k)),
+                        bits(&want),
+                        "lane {k} from {:?}",
+                        ctx[k].p
+                    );
                     in_lanes += usize::from(want.is_some() && !want.unwrap().is_delta);
                 }
             }
@@ -1503,4 +1516,3 @@ fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
         "{in_lanes} samples of {total} queries"
     );
 }
-

@@ -154,8 +154,8 @@ impl LightTriangles {
         let d2 = to_c.length_squared();
         let r2 = gather(&table.fields[19], index);
         let far = d2.simd_gt(f32x16::splat(4.0) * r2);
-        let estimate = f32x16::splat(0.5) * table.vector(3, index).dot(to_c).abs()
-            / (d2 * d2.sqrt());
+        let estimate =
+            f32x16::splat(0.5) * table.vector(3, index).dot(to_c).abs() / (d2 * d2.sqrt());
         let small = estimate.simd_ge(f32x16::splat(MIN_SPHERICAL_SAMPLE_AREA));
         let done = self.lanes & (far & !small).to_bitmask();
 
