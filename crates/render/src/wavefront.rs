@@ -27,6 +27,7 @@ use radia_math::real::{Mask, Real, Vector2, Vector3};
 use radia_math::{Ray, Spectrum};
 use radia_sampling::mis::power_heuristic_r;
 use radia_sampling::{PixelKey, SampleStream, Sampler};
+use radia_scene::camera::CameraRays;
 use radia_scene::{EmitterSampleLanes, RayPacket, Scene, ShadowLanes, SurfaceLanes, PACKET_LANES};
 
 /// Paths in flight per packet.
@@ -89,6 +90,31 @@ impl<'a, S: Sampler> Paths<'a, S> {
             prev_pdf: f32x16::ZERO,
             prev_delta: 0,
         }
+    }
+
+    /// Starts the paths of `lanes` along their camera rays: [`PathIntegrator::start`] in
+    /// lanes (for `max_depth` > 0), the same state.
+    #[inline(always)]
+    fn start(&mut self, lanes: u32, camera: &CameraRays) {
+        let m = mask(lanes);
+        let o = Vec3s::from_rows(&camera.o);
+        let zero = Vec3s::splat(Vec3::ZERO);
+        self.ray_o = Vector3::select(m, o, self.ray_o);
+        self.ray_d = Vector3::select(m, Vec3s::from_rows(&camera.d), self.ray_d);
+        self.ray_t_max = m.select(f32x16::new(camera.t_max), self.ray_t_max);
+        self.result = Vector3::select(m, zero, self.result);
+        self.beta = Vector3::select(m, Vec3s::splat(Vec3::ONE), self.beta);
+        self.eta = m.select(f32x16::ONE, self.eta);
+        for k in lanes_of(lanes) {
+            self.depth[k] = 0;
+        }
+        // A camera ray counts as "delta" so that emitters it sees directly get full weight.
+        self.primary |= lanes;
+        self.prev_p = Vector3::select(m, o, self.prev_p);
+        self.prev_n = Vector3::select(m, zero, self.prev_n);
+        self.prev_pdf = m.select(f32x16::ONE, self.prev_pdf);
+        self.prev_delta |= lanes;
+        self.live |= lanes;
     }
 
     /// Lane `k`'s path as one [`PathState`].
@@ -231,21 +257,16 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
             paths.rays[k] = 0;
         }
         if fresh != 0 {
-            let camera_rays = scene.camera.generate_rays(&films);
-            for k in lanes_of(fresh) {
-                match integrator.start(camera_rays.ray(k)) {
-                    Some(path) => {
-                        paths.set(k, &path);
-                        paths.live |= 1 << k;
-                    }
-                    None => {
-                        // max_depth 0: nothing is seen.
-                        out[paths.slot[k]] = Traced {
-                            pos: paths.pos[k],
-                            ..Traced::EMPTY
-                        };
-                    }
+            if integrator.max_depth == 0 {
+                // Nothing is seen (`PathIntegrator::start` gives no path).
+                for k in lanes_of(fresh) {
+                    out[paths.slot[k]] = Traced {
+                        pos: paths.pos[k],
+                        ..Traced::EMPTY
+                    };
                 }
+            } else {
+                paths.start(fresh, &scene.camera.generate_rays(&films));
             }
         }
         let live = paths.live;
@@ -505,6 +526,9 @@ fn environment<S: Sampler>(
         return;
     };
     let emitter = &scene.emitters[env as usize];
+    // The radiance and the emitter's density of each lane's direction.
+    let mut radiance = [[0.0; LANES]; 3];
+    let mut pdf_dir = [0.0; LANES];
     let mut found = [(Spectrum::ZERO, 0.0); LANES];
     match map {
         Some(map) => map.eval_pdfs(lanes, &paths.ray_d.to_rows(), &mut found),
@@ -514,22 +538,38 @@ fn environment<S: Sampler>(
             }
         }
     }
-    let mut le = Vec3s::splat(Vec3::ZERO);
-    let mut w = f32x16::ZERO;
     for k in lanes_of(lanes) {
-        let (radiance, pdf_dir) = found[k];
-        let prev = PrevVertex {
-            p: paths.prev_p.lane(k),
-            n: paths.prev_n.lane(k),
-            bsdf_pdf: paths.prev_pdf.lane(k),
-            bsdf_delta: paths.prev_delta & (1 << k) != 0,
-        };
-        le.set_lane(k, radiance);
-        w.set_lane(
-            k,
-            integrator.mis_emitter_hit(&prev, |ctx| scene.pdf_environment(ctx, env, pdf_dir)),
-        );
+        let (le, pdf) = found[k];
+        (radiance[0][k], radiance[1][k], radiance[2][k]) = (le.x, le.y, le.z);
+        pdf_dir[k] = pdf;
     }
+    let le = Vec3s::from_rows(&radiance);
+    let w = match scene.environment_pmf(env) {
+        // `PathIntegrator::mis_emitter_hit` with `Scene::pdf_environment`, in lanes.
+        Some(pmf) => {
+            let pdf_em = if pmf == 0.0 {
+                f32x16::ZERO
+            } else {
+                f32x16::splat(pmf) * f32x16::new(pdf_dir)
+            };
+            mask(paths.prev_delta).select(f32x16::ONE, power_heuristic_r(paths.prev_pdf, pdf_em))
+        }
+        // The choice depends on where the path left from: lane by lane.
+        None => {
+            let mut w = [0.0; LANES];
+            for k in lanes_of(lanes) {
+                let prev = PrevVertex {
+                    p: paths.prev_p.lane(k),
+                    n: paths.prev_n.lane(k),
+                    bsdf_pdf: paths.prev_pdf.lane(k),
+                    bsdf_delta: paths.prev_delta & (1 << k) != 0,
+                };
+                w[k] = integrator
+                    .mis_emitter_hit(&prev, |ctx| scene.pdf_environment(ctx, env, pdf_dir[k]));
+            }
+            f32x16::new(w)
+        }
+    };
     paths.result = Vector3::select(
         mask(lanes),
         paths.result + paths.beta * le * w,

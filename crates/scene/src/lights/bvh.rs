@@ -625,6 +625,15 @@ impl LightBvh {
         }
     }
 
+    /// [`LightBvh::pmf`] of `prim` if it is the same from every point (a light at infinity,
+    /// or a primitive never chosen), else `None`.
+    pub fn pmf_anywhere(&self, prim: usize) -> Option<f32> {
+        match self.leaf_of[prim] {
+            AT_INFINITY | NONE => Some(self.pmf(Vec3::ZERO, Vec3::ZERO, prim)),
+            _ => None,
+        }
+    }
+
     /// The probability of the `i`-th light at infinity among them.
     #[inline]
     fn infinite_share(&self, i: usize) -> f32 {

@@ -290,6 +290,19 @@ impl Lights {
             Selector::Bvh(b) => b.pmf(ctx.p, ctx.n, index),
         }
     }
+
+    /// [`Lights::pmf`] of light primitive `index` where it is the same from every point
+    /// (every light of the uniform and power choices, the lights at infinity of the BVH's);
+    /// `None` where it depends on the point.
+    #[inline]
+    pub fn pmf_anywhere(&self, index: usize) -> Option<f32> {
+        match &self.selector {
+            Selector::Empty => Some(0.0),
+            Selector::Single => Some(1.0),
+            Selector::Table(t) => Some(t.pmf(index)),
+            Selector::Bvh(b) => b.pmf_anywhere(index),
+        }
+    }
 }
 
 /// The `sampling_weight` of emitter `e` (1 when `weights` has no entry for it).
@@ -531,6 +544,14 @@ impl Scene {
     #[inline]
     pub fn pdf_environment(&self, ctx: &LightContext, env: u32, pdf_direction: f32) -> f32 {
         self.chosen_times(ctx, env, 0, || pdf_direction)
+    }
+
+    /// The probability with which light selection picks the environment `env`, where it is
+    /// the same from every point ([`Lights::pmf_anywhere`]): what [`Scene::pdf_environment`]
+    /// multiplies the direction's density by (0: it gives 0).
+    #[inline]
+    pub fn environment_pmf(&self, env: u32) -> Option<f32> {
+        self.lights.pmf_anywhere(self.lights.prim_index(env, 0))
     }
 
     /// The probability that light selection from `ctx` picks light primitive `face` of
