@@ -2,8 +2,8 @@
 //! samples. The renderer picks the integrator once per render, so each compiles into its own
 //! tile loop (a generic, not a `dyn` call per sample).
 
-use crate::path::{PathIntegrator, PathStats};
-use glam::Vec2;
+use crate::path::{layout, PathIntegrator, PathStats};
+use glam::{UVec2, Vec2};
 use radia_math::{Ray, Spectrum};
 use radia_sampling::{SampleStream, Sampler};
 use radia_scene::Scene;
@@ -14,14 +14,26 @@ use radia_scene::Scene;
 /// iterator and moved into the lane was read back in wide loads of its just-written narrow
 /// fields, which stall on store forwarding (a fifth of the packet loop's own time on
 /// `scenes/furnace.xml`, whose paths are short).
-pub(crate) trait CameraSamples<'a, S> {
+pub(crate) trait CameraSamples<'a, S: Sampler> {
     /// A stream to start samples in.
     fn stream(&self) -> SampleStream<'a, S>;
 
+    /// Starts the next camera sample in `stream` and gives its pixel; `None` when the tile
+    /// has no more. Its film values are those of dimensions `layout::FILM`.
+    fn next_pixel(&mut self, stream: &mut SampleStream<'a, S>) -> Option<UVec2>;
+
+    /// The film position, in pixels and as a fraction of the film (what the camera makes its
+    /// ray from), of a sample of `pixel` with film values `u`.
+    fn position(&self, pixel: UVec2, u: Vec2) -> (Vec2, Vec2);
+
     /// Starts the next camera sample in `stream` (past the film's dimensions) and gives its
-    /// film position in pixels and as a fraction of the film (what the camera makes its
-    /// ray from); `None` when the tile has no more.
-    fn next_into(&mut self, stream: &mut SampleStream<'a, S>) -> Option<(Vec2, Vec2)>;
+    /// film position ([`CameraSamples::position`]); `None` when the tile has no more.
+    #[inline(always)]
+    fn next_into(&mut self, stream: &mut SampleStream<'a, S>) -> Option<(Vec2, Vec2)> {
+        let pixel = self.next_pixel(stream)?;
+        stream.seek(layout::FILM);
+        Some(self.position(pixel, stream.next_2d()))
+    }
 }
 
 pub(crate) trait Integrator: Sync {

@@ -16,7 +16,7 @@ use crate::classic::ClassicIntegrator;
 use crate::film::{Film, Filter, FilterSampler, Image};
 use crate::integrator::{CameraSamples, Integrator, Traced};
 use crate::npr::NprIntegrator;
-use crate::path::{layout, PathIntegrator, PathStats};
+use crate::path::{PathIntegrator, PathStats};
 use glam::{UVec2, Vec2};
 use radia_math::{Ray, Spectrum};
 use radia_sampling::{with_sampler, AnySampler, PixelKey, SampleStream, Sampler, SamplerKind};
@@ -453,7 +453,7 @@ impl<'a, S: Sampler> CameraSamples<'a, S> for TileSamples<'a, S> {
     }
 
     #[inline]
-    fn next_into(&mut self, stream: &mut SampleStream<'a, S>) -> Option<(Vec2, Vec2)> {
+    fn next_pixel(&mut self, stream: &mut SampleStream<'a, S>) -> Option<UVec2> {
         while self.s == self.s_end {
             if self.y >= self.y1 {
                 return None;
@@ -469,10 +469,14 @@ impl<'a, S: Sampler> CameraSamples<'a, S> for TileSamples<'a, S> {
             (self.s, self.s_end) = self.pass.range(self.x, self.y);
             self.key = PixelKey::new(self.seed, UVec2::new(self.x, self.y));
         }
-        let (x, y) = (self.x, self.y);
         stream.restart(self.key, self.s);
-        stream.seek(layout::FILM);
-        let u = stream.next_2d();
+        self.s += 1;
+        Some(UVec2::new(self.x, self.y))
+    }
+
+    #[inline]
+    fn position(&self, pixel: UVec2, u: Vec2) -> (Vec2, Vec2) {
+        let (x, y) = (pixel.x, pixel.y);
         let pos = match self.fis {
             // (The box filter's offsets, u − ½ from the centre, as even sampling has them.)
             Some(fis) if !fis.is_box() => {
@@ -483,8 +487,7 @@ impl<'a, S: Sampler> CameraSamples<'a, S> for TileSamples<'a, S> {
         };
         let size = &self.scene.film;
         let film = pos / Vec2::new(size.width as f32, size.height as f32);
-        self.s += 1;
-        Some((pos, film))
+        (pos, film)
     }
 }
 

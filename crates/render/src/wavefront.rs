@@ -20,7 +20,7 @@
 
 use crate::integrator::{CameraSamples, Traced};
 use crate::path::{layout, PathIntegrator, PathState, PathStats, PendingShadow, PrevVertex};
-use glam::{Vec2, Vec3};
+use glam::{UVec2, Vec2, Vec3};
 use radia_bsdf::{Bsdf, ShadingPointR};
 use radia_math::lanes::{f32x16, Vec3s};
 use radia_math::real::{Mask, Real, Vector2, Vector3};
@@ -236,25 +236,42 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
     let environment_map = scene.environment_map();
     loop {
         // ---- Free lanes take the next camera samples ----
-        // Their rays are made sixteen at once (`Camera::generate_rays`).
+        // Their film values are made sixteen at once where the sampler can and enough lanes
+        // are fresh, and their rays too (`Camera::generate_rays`).
         let mut fresh = 0u32;
-        let mut films = [[0.0; LANES]; 2];
+        let mut pixel = [UVec2::ZERO; LANES];
         for k in 0..LANES {
             if paths.live & (1 << k) != 0 || next == out.len() {
                 continue;
             }
-            let Some((pos, film)) = samples.next_into(&mut paths.stream[k]) else {
+            let Some(p) = samples.next_pixel(&mut paths.stream[k]) else {
                 break;
             };
+            pixel[k] = p;
             next += 1;
-            (films[0][k], films[1][k]) = (film.x, film.y);
             fresh |= 1 << k;
             let stream = &paths.stream[k];
             (paths.key[k], paths.index[k]) = (stream.key(), stream.index());
             paths.prepared[k] = stream.prepared();
             paths.slot[k] = next - 1;
-            paths.pos[k] = pos;
             paths.rays[k] = 0;
+        }
+        let mut films = [[0.0; LANES]; 2];
+        if fresh != 0 {
+            let values = film_values(&paths, fresh);
+            for k in lanes_of(fresh) {
+                let u = match &values {
+                    Some(v) => Vec2::new(v[0][k], v[1][k]),
+                    None => {
+                        let stream = &mut paths.stream[k];
+                        stream.seek(layout::FILM);
+                        stream.next_2d()
+                    }
+                };
+                let (pos, film) = samples.position(pixel[k], u);
+                paths.pos[k] = pos;
+                (films[0][k], films[1][k]) = (film.x, film.y);
+            }
         }
         if fresh != 0 {
             if integrator.max_depth == 0 {
@@ -486,6 +503,34 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
     }
 }
 
+/// Fresh lanes from which the film values are made all at once
+/// ([`Sampler::get_block_lanes`]): the call makes sixteen lanes' values in about the time of
+/// five or six one-lane calls.
+const FILM_LANES_FROM: u32 = 6;
+
+/// The film values (`layout::FILM`) of the fresh samples of `lanes`, value j of lane k in
+/// `[j][k]`, made for all lanes at once by samplers that can, if enough lanes are fresh;
+/// `None` for the others, whose values are drawn lane by lane from the streams.
+#[inline(always)]
+fn film_values<S: Sampler>(paths: &Paths<'_, S>, lanes: u32) -> Option<[[f32; LANES]; 8]> {
+    const _: () = assert!(layout::FILM % 4 == 0);
+    if lanes.count_ones() < FILM_LANES_FROM {
+        return None;
+    }
+    let mut out = [[0.0; LANES]; 8];
+    paths.stream[0]
+        .sampler()
+        .get_block_lanes(
+            lanes,
+            &paths.key,
+            &paths.index,
+            &[layout::FILM / 4; LANES],
+            &paths.prepared,
+            &mut out,
+        )
+        .then_some(out)
+}
+
 /// The eight values of the bounce blocks of `lanes` (`layout::bounce` of each lane's
 /// depth), value j of lane k in `[j]`, made for all lanes at once by samplers that can
 /// (`Sampler::get_block_lanes`); `None` for the others, whose values are drawn lane by lane
@@ -527,30 +572,34 @@ fn environment<S: Sampler>(
     };
     let emitter = &scene.emitters[env as usize];
     // The radiance and the emitter's density of each lane's direction.
-    let mut radiance = [[0.0; LANES]; 3];
-    let mut pdf_dir = [0.0; LANES];
-    let mut found = [(Spectrum::ZERO, 0.0); LANES];
-    match map {
-        Some(map) => map.eval_pdfs(lanes, &paths.ray_d.to_rows(), &mut found),
-        None => {
-            for k in lanes_of(lanes) {
-                found[k] = emitter.eval_environment_pdf(paths.ray_d.lane(k));
+    let (le, pdf_dir) = if let Some((radiance, pdf)) = emitter.uniform_environment() {
+        (Vec3s::splat(radiance), f32x16::splat(pdf))
+    } else {
+        let mut found = [(Spectrum::ZERO, 0.0); LANES];
+        match map {
+            Some(map) => map.eval_pdfs(lanes, &paths.ray_d.to_rows(), &mut found),
+            None => {
+                for k in lanes_of(lanes) {
+                    found[k] = emitter.eval_environment_pdf(paths.ray_d.lane(k));
+                }
             }
         }
-    }
-    for k in lanes_of(lanes) {
-        let (le, pdf) = found[k];
-        (radiance[0][k], radiance[1][k], radiance[2][k]) = (le.x, le.y, le.z);
-        pdf_dir[k] = pdf;
-    }
-    let le = Vec3s::from_rows(&radiance);
+        let mut radiance = [[0.0; LANES]; 3];
+        let mut pdf_dir = [0.0; LANES];
+        for k in lanes_of(lanes) {
+            let (le, pdf) = found[k];
+            (radiance[0][k], radiance[1][k], radiance[2][k]) = (le.x, le.y, le.z);
+            pdf_dir[k] = pdf;
+        }
+        (Vec3s::from_rows(&radiance), f32x16::new(pdf_dir))
+    };
     let w = match scene.environment_pmf(env) {
         // `PathIntegrator::mis_emitter_hit` with `Scene::pdf_environment`, in lanes.
         Some(pmf) => {
             let pdf_em = if pmf == 0.0 {
                 f32x16::ZERO
             } else {
-                f32x16::splat(pmf) * f32x16::new(pdf_dir)
+                f32x16::splat(pmf) * pdf_dir
             };
             mask(paths.prev_delta).select(f32x16::ONE, power_heuristic_r(paths.prev_pdf, pdf_em))
         }
@@ -565,7 +614,7 @@ fn environment<S: Sampler>(
                     bsdf_delta: paths.prev_delta & (1 << k) != 0,
                 };
                 w[k] = integrator
-                    .mis_emitter_hit(&prev, |ctx| scene.pdf_environment(ctx, env, pdf_dir[k]));
+                    .mis_emitter_hit(&prev, |ctx| scene.pdf_environment(ctx, env, pdf_dir.lane(k)));
             }
             f32x16::new(w)
         }

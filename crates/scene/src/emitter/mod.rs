@@ -268,6 +268,16 @@ impl Emitter {
         }
     }
 
+    /// [`Emitter::eval_environment_pdf`] where it is the same along every direction (a
+    /// constant environment), else `None`.
+    #[inline]
+    pub fn uniform_environment(&self) -> Option<(Spectrum, f32)> {
+        match self {
+            Emitter::Constant(e) => Some((e.radiance, ConstantLight::pdf_direction())),
+            _ => None,
+        }
+    }
+
     /// [`Emitter::eval_environment`] and [`Emitter::pdf_direction`] of an escaped ray's
     /// direction `d` at once (an envmap finds the direction's place in its map once for both).
     #[inline]
