@@ -613,8 +613,9 @@ fn environment<S: Sampler>(
                     bsdf_pdf: paths.prev_pdf.lane(k),
                     bsdf_delta: paths.prev_delta & (1 << k) != 0,
                 };
-                w[k] = integrator
-                    .mis_emitter_hit(&prev, |ctx| scene.pdf_environment(ctx, env, pdf_dir.lane(k)));
+                w[k] = integrator.mis_emitter_hit(&prev, |ctx| {
+                    scene.pdf_environment(ctx, env, pdf_dir.lane(k))
+                });
             }
             f32x16::new(w)
         }
