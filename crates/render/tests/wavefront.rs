@@ -11,6 +11,7 @@ use radia_render::film::Filter;
 use radia_render::path::{layout, PathIntegrator, PathStats};
 use radia_render::{render, Film, RenderOptions, PASS_SPP};
 use radia_sampling::{with_sampler, AnySampler, PixelKey, SampleStream, SamplerKind};
+use radia_scene::lights::LightSamplerKind;
 use radia_scene::{FilterDesc, Scene};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
@@ -73,17 +74,22 @@ fn packets_of_paths_render_what_one_path_at_a_time_renders() {
         desc.film.height = RES;
         desc.film.filter = FilterDesc::Box;
         let scene = Scene::build(desc.clone());
-        let mut variants = vec![scene];
+        let mut variants = vec![("bvh", scene)];
         // Also with the emitters hidden from the camera (whose rays the packet loop steps one
         // at a time) and with paths too short for an estimate at the second vertex or at all.
         for (hide_emitters, max_depth) in [(true, -1), (false, 1), (false, 2)] {
             let mut d = desc.clone();
             d.integrator.hide_emitters = hide_emitters;
             d.integrator.max_depth = max_depth;
-            variants.push(Scene::build(d));
+            variants.push(("bvh", Scene::build(d)));
         }
-        for (scene, sampler) in variants.iter().flat_map(|scene| {
-            [SamplerKind::Independent, SamplerKind::Sobol].map(|sampler| (scene, sampler))
+        // And with Mitsuba's uniform choice of light (whose probabilities, of the environment
+        // too, the packet loop reads in lanes).
+        let mut uniform = Scene::build(desc.clone());
+        uniform.set_light_sampler(LightSamplerKind::Uniform);
+        variants.push(("uniform", uniform));
+        for ((lights, scene), sampler) in variants.iter().flat_map(|variant| {
+            [SamplerKind::Independent, SamplerKind::Sobol].map(|sampler| (variant, sampler))
         }) {
             let options = RenderOptions {
                 spp: PASS_SPP,
@@ -95,7 +101,8 @@ fn packets_of_paths_render_what_one_path_at_a_time_renders() {
             assert_eq!(out.stats.spp, PASS_SPP);
             assert!(
                 bits(&out.image.pixels) == one_path_at_a_time(scene, &options),
-                "{}, {}, hide_emitters {}, max_depth {}: the packet loop's image differs",
+                "{}, {}, {lights} light choice, hide_emitters {}, max_depth {}: the packet \
+                 loop's image differs",
                 path.display(),
                 sampler.name(),
                 scene.integrator.hide_emitters,
@@ -104,5 +111,5 @@ fn packets_of_paths_render_what_one_path_at_a_time_renders() {
             compared += 1;
         }
     }
-    assert!(compared >= 150, "{compared} renders compared");
+    assert!(compared >= 190, "{compared} renders compared");
 }
