@@ -234,6 +234,10 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
     // Which materials the lanes run (by BSDF index).
     let lane_models: Vec<bool> = scene.bsdfs.iter().map(Bsdf::has_r).collect();
     let environment_map = scene.environment_map();
+    // The environment and the probability of choosing it (from any point).
+    let environment_choice = scene
+        .environment
+        .map(|env| (env, scene.environment_pmf(env)));
     loop {
         // ---- Free lanes take the next camera samples ----
         // Their film values are made sixteen at once where the sampler can and enough lanes
@@ -256,9 +260,9 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
             paths.slot[k] = next - 1;
             paths.rays[k] = 0;
         }
-        let mut films = [[0.0; LANES]; 2];
         if fresh != 0 {
             let values = film_values(&paths, fresh);
+            let mut films = [[0.0; LANES]; 2];
             for k in lanes_of(fresh) {
                 let u = match &values {
                     Some(v) => Vec2::new(v[0][k], v[1][k]),
@@ -272,8 +276,6 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
                 paths.pos[k] = pos;
                 (films[0][k], films[1][k]) = (film.x, film.y);
             }
-        }
-        if fresh != 0 {
             if integrator.max_depth == 0 {
                 // Nothing is seen (`PathIntegrator::start` gives no path).
                 for k in lanes_of(fresh) {
@@ -326,14 +328,8 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
 
         // ---- Escaped rays: the environment's emission ----
         let escaped = vector & !its.hit;
-        if escaped & !hidden != 0 {
-            environment(
-                integrator,
-                scene,
-                environment_map,
-                &mut paths,
-                escaped & !hidden,
-            );
+        if let Some(env) = environment_choice.filter(|_| escaped & !hidden != 0) {
+            environment(scene, environment_map, env, &mut paths, escaped & !hidden);
         }
         ends |= escaped;
 
@@ -517,24 +513,12 @@ fn film_values<S: Sampler>(paths: &Paths<'_, S>, lanes: u32) -> Option<[[f32; LA
     if lanes.count_ones() < FILM_LANES_FROM {
         return None;
     }
-    let mut out = [[0.0; LANES]; 8];
-    paths.stream[0]
-        .sampler()
-        .get_block_lanes(
-            lanes,
-            &paths.key,
-            &paths.index,
-            &[layout::FILM / 4; LANES],
-            &paths.prepared,
-            &mut out,
-        )
-        .then_some(out)
+    block_values(paths, lanes, &[layout::FILM / 4; LANES])
 }
 
 /// The eight values of the bounce blocks of `lanes` (`layout::bounce` of each lane's
-/// depth), value j of lane k in `[j]`, made for all lanes at once by samplers that can
-/// (`Sampler::get_block_lanes`); `None` for the others, whose values are drawn lane by lane
-/// from the streams.
+/// depth), value j of lane k in `[j]`, made for all lanes at once by samplers that can;
+/// `None` for the others, whose values are drawn lane by lane from the streams.
 #[inline(always)]
 fn bounce_values<S: Sampler>(paths: &Paths<'_, S>, lanes: u32) -> Option<[f32x16; 8]> {
     if lanes == 0 {
@@ -542,18 +526,29 @@ fn bounce_values<S: Sampler>(paths: &Paths<'_, S>, lanes: u32) -> Option<[f32x16
     }
     const _: () = assert!(layout::BOUNCES % 4 == 0 && layout::BOUNCE_DIMS == 8);
     let blocks = paths.depth.map(|d| layout::bounce(d) / 4);
+    block_values(paths, lanes, &blocks).map(|out| out.map(f32x16::new))
+}
+
+/// Values `4 blocks[k] .. 4 blocks[k] + 8` of each lane k of `lanes` ([`Sampler::get_block_lanes`]
+/// of the lanes' samples), value j in `[j][k]`; `None` for samplers that make no blocks.
+#[inline(always)]
+fn block_values<S: Sampler>(
+    paths: &Paths<'_, S>,
+    lanes: u32,
+    blocks: &[u32; LANES],
+) -> Option<[[f32; LANES]; 8]> {
     let mut out = [[0.0; LANES]; 8];
-    let sampler = paths.stream[0].sampler();
-    sampler
+    paths.stream[0]
+        .sampler()
         .get_block_lanes(
             lanes,
             &paths.key,
             &paths.index,
-            &blocks,
+            blocks,
             &paths.prepared,
             &mut out,
         )
-        .then(|| out.map(f32x16::new))
+        .then_some(out)
 }
 
 /// The environment's emission along the rays of `lanes`, which escaped the scene
@@ -561,15 +556,12 @@ fn bounce_values<S: Sampler>(paths: &Paths<'_, S>, lanes: u32) -> Option<[f32x16
 /// `hide_emitters`).
 #[inline(never)]
 fn environment<S: Sampler>(
-    integrator: &PathIntegrator,
     scene: &Scene,
     map: Option<&radia_scene::emitter::Envmap>,
+    (env, pmf): (u32, f32),
     paths: &mut Paths<'_, S>,
     lanes: u32,
 ) {
-    let Some(env) = scene.environment else {
-        return;
-    };
     let emitter = &scene.emitters[env as usize];
     // The radiance and the emitter's density of each lane's direction.
     let (le, pdf_dir) = if let Some((radiance, pdf)) = emitter.uniform_environment() {
@@ -593,33 +585,14 @@ fn environment<S: Sampler>(
         }
         (Vec3s::from_rows(&radiance), f32x16::new(pdf_dir))
     };
-    let w = match scene.environment_pmf(env) {
-        // `PathIntegrator::mis_emitter_hit` with `Scene::pdf_environment`, in lanes.
-        Some(pmf) => {
-            let pdf_em = if pmf == 0.0 {
-                f32x16::ZERO
-            } else {
-                f32x16::splat(pmf) * pdf_dir
-            };
-            mask(paths.prev_delta).select(f32x16::ONE, power_heuristic_r(paths.prev_pdf, pdf_em))
-        }
-        // The choice depends on where the path left from: lane by lane.
-        None => {
-            let mut w = [0.0; LANES];
-            for k in lanes_of(lanes) {
-                let prev = PrevVertex {
-                    p: paths.prev_p.lane(k),
-                    n: paths.prev_n.lane(k),
-                    bsdf_pdf: paths.prev_pdf.lane(k),
-                    bsdf_delta: paths.prev_delta & (1 << k) != 0,
-                };
-                w[k] = integrator.mis_emitter_hit(&prev, |ctx| {
-                    scene.pdf_environment(ctx, env, pdf_dir.lane(k))
-                });
-            }
-            f32x16::new(w)
-        }
+    // `PathIntegrator::mis_emitter_hit` with `Scene::pdf_environment`, in lanes: the
+    // environment is chosen with the same probability from every point.
+    let pdf_em = if pmf == 0.0 {
+        f32x16::ZERO
+    } else {
+        f32x16::splat(pmf) * pdf_dir
     };
+    let w = mask(paths.prev_delta).select(f32x16::ONE, power_heuristic_r(paths.prev_pdf, pdf_em));
     paths.result = Vector3::select(
         mask(lanes),
         paths.result + paths.beta * le * w,

@@ -546,12 +546,15 @@ impl Scene {
         self.chosen_times(ctx, env, 0, || pdf_direction)
     }
 
-    /// The probability with which light selection picks the environment `env`, where it is
-    /// the same from every point ([`Lights::pmf_anywhere`]): what [`Scene::pdf_environment`]
-    /// multiplies the direction's density by (0: it gives 0).
+    /// The probability with which light selection picks the environment `env`: the same from
+    /// every point ([`Lights::pmf_anywhere`]; the light BVH keeps lights at infinity outside
+    /// the tree), what [`Scene::pdf_environment`] multiplies the direction's density by (0: it
+    /// gives 0).
     #[inline]
-    pub fn environment_pmf(&self, env: u32) -> Option<f32> {
-        self.lights.pmf_anywhere(self.lights.prim_index(env, 0))
+    pub fn environment_pmf(&self, env: u32) -> f32 {
+        self.lights
+            .pmf_anywhere(self.lights.prim_index(env, 0))
+            .expect("lights at infinity are chosen apart from any point")
     }
 
     /// The probability that light selection from `ctx` picks light primitive `face` of
