@@ -32,11 +32,13 @@
 //!   `scenes/many-lights.xml`: 1.6× less relMSE at equal spp than the binary tree; eight
 //!   children gave 1.5×).
 
+use super::lanes_of;
 use crate::emitter::Emitter;
 use crate::shape::{Shape, ShapeKind};
 use glam::Vec3;
+use radia_math::lanes::{f32x16, Vec3s};
+use radia_math::real::Real;
 use radia_math::{safe_acos, safe_sqrt, PI};
-use wide::f32x16;
 
 /// What a subtree of lights can send towards a point (pbrt-v4's `LightBounds`).
 #[derive(Clone, Copy, Debug)]
@@ -180,67 +182,128 @@ impl ChildBounds {
     /// the sum.
     #[inline]
     fn weights(&self, p: Vec3, n: Vec3, count: usize) -> ([f32; WIDTH], f32) {
-        let c = self.importance(p, n).to_array();
-        let sum: f32 = c[..count].iter().sum();
+        let bounds = Bounds16 {
+            center: self.center.map(lanes),
+            radius: lanes(self.radius),
+            w: self.w.map(lanes),
+            phi: lanes(self.phi),
+            cos_o: lanes(self.cos_o),
+            sin_o: lanes(self.sin_o),
+            cos_e: lanes(self.cos_e),
+            two_sided: lanes(self.two_sided),
+        };
+        let splat = |v: Vec3| [v.x, v.y, v.z].map(f32x16::splat);
+        let has_n = f32x16::splat(f32::from_bits(if n != Vec3::ZERO { u32::MAX } else { 0 }));
+        let c = importance(&bounds, splat(p), splat(n), has_n).to_array();
+        let sum = running_sum(&c[..count]);
         if sum > 0.0 && sum.is_finite() {
             (c, sum)
         } else {
-            (self.phi, self.phi[..count].iter().sum())
+            (self.phi, running_sum(&self.phi[..count]))
         }
     }
 
-    /// pbrt-v4's `CompactLightBounds::Importance` of every child at point `p` with shading
-    /// normal `n` (zero: no receiver cosine): φ cos θ' / d², times cos θ'ᵢ at a surface,
-    /// where θ' is the smallest angle between an emission direction and the direction to `p`
-    /// over the bounds, θ'ᵢ the same at the receiver, and d is clamped to the bounds' radius.
-    /// Branches become lane selects; each lane's operations are the scalar formula's, in its
-    /// order.
-    #[inline]
-    fn importance(&self, p: Vec3, n: Vec3) -> f32x16 {
-        let (zero, one) = (f32x16::splat(0.0), f32x16::splat(1.0));
-        let d = [
-            f32x16::splat(p.x) - lanes(self.center[0]),
-            f32x16::splat(p.y) - lanes(self.center[1]),
-            f32x16::splat(p.z) - lanes(self.center[2]),
-        ];
-        let dc2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        let radius = lanes(self.radius);
-        let r2 = radius * radius;
-        let (phi, cos_e) = (lanes(self.phi), lanes(self.cos_e));
-        // Inside the bounding sphere every direction is possible: θ' = θ'ᵢ = 0.
-        let inside = dc2.simd_le(r2);
-        let inside_importance = cos_e.simd_lt(one).select(
-            (phi / r2.max(f32x16::splat(1e-20))).min(f32x16::splat(f32::MAX)),
-            zero,
-        );
-
-        let inv = one / dc2.sqrt();
-        // Unit direction from the lights to p; the half-angle θb of the cone of directions
-        // from p that the bounding sphere subtends.
-        let wi = [d[0] * inv, d[1] * inv, d[2] * inv];
-        let sin_b = radius * inv;
-        let cos_b = safe_sqrt16(one - sin_b * sin_b);
-        let w = [lanes(self.w[0]), lanes(self.w[1]), lanes(self.w[2])];
-        let cos_w = w[0] * wi[0] + w[1] * wi[1] + w[2] * wi[2];
-        let cos_w = lanes(self.two_sided).select(cos_w.abs(), cos_w);
-        let sin_w = safe_sqrt16(one - cos_w * cos_w);
-        // θ' = max(0, θw − θo − θb).
-        let (sin_o, cos_o) = (lanes(self.sin_o), lanes(self.cos_o));
-        let cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, cos_o);
-        let sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, cos_o);
-        let cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
-        let mut importance = phi * cos_p * (inv * inv);
-        if n != Vec3::ZERO {
-            let cos_i = (wi[0] * n.x + wi[1] * n.y + wi[2] * n.z).abs();
-            let sin_i = safe_sqrt16(one - cos_i * cos_i);
-            importance *= cos_sub_clamped(sin_i, cos_i, sin_b, cos_b);
+    /// Child `c`'s bounds in every lane.
+    #[inline(always)]
+    fn child(&self, c: usize) -> Bounds16 {
+        let splat = |v: &[f32; WIDTH]| f32x16::splat(v[c]);
+        Bounds16 {
+            center: [0, 1, 2].map(|a| splat(&self.center[a])),
+            radius: splat(&self.radius),
+            w: [0, 1, 2].map(|a| splat(&self.w[a])),
+            phi: splat(&self.phi),
+            cos_o: splat(&self.cos_o),
+            sin_o: splat(&self.sin_o),
+            cos_e: splat(&self.cos_e),
+            two_sided: splat(&self.two_sided),
         }
-        // f32::clamp(0, MAX), which keeps a NaN.
-        let clamped = importance.max(zero).min(f32x16::splat(f32::MAX));
-        let importance = importance.is_nan().select(importance, clamped);
-        let outside = cos_p.simd_le(cos_e).select(zero, importance);
-        inside.select(inside_importance, outside)
     }
+}
+
+/// `x[0] + x[1] + …`, added in order (`x` not empty).
+#[inline(always)]
+fn running_sum(x: &[f32]) -> f32 {
+    x[1..].iter().fold(x[0], |sum, &v| sum + v)
+}
+
+/// The child whose interval of the running sum of the weights `c` holds `t` (the sum's
+/// fraction u), and `t` less the weights before it; past the end (by round-off), the last
+/// one with a chance.
+#[inline(always)]
+fn choose(c: &[f32], mut t: f32) -> (usize, f32) {
+    let mut k = 0;
+    while k + 1 < c.len() && !(t < c[k]) {
+        t -= c[k];
+        k += 1;
+    }
+    while c[k] == 0.0 && k > 0 {
+        k -= 1;
+    }
+    (k, t)
+}
+
+/// Light bounds in lanes: sixteen children of a node seen from one point
+/// ([`ChildBounds::weights`]), or one child seen from sixteen points
+/// ([`LightBvh::sample_lanes`]).
+struct Bounds16 {
+    center: [f32x16; 3],
+    radius: f32x16,
+    w: [f32x16; 3],
+    phi: f32x16,
+    cos_o: f32x16,
+    sin_o: f32x16,
+    cos_e: f32x16,
+    two_sided: f32x16,
+}
+
+/// pbrt-v4's `CompactLightBounds::Importance` of bounds `b` at point `p` with shading normal
+/// `n`, lane by lane: φ cos θ' / d², times cos θ'ᵢ at a surface (lanes of `has_n`: the others
+/// have no normal), where θ' is the smallest angle between an emission direction and the
+/// direction to `p` over the bounds, θ'ᵢ the same at the receiver, and d is clamped to the
+/// bounds' radius. Branches become lane selects; each lane's operations are the scalar
+/// formula's, in its order, so both ways of filling the lanes give the same bits.
+#[inline(always)]
+fn importance(b: &Bounds16, p: [f32x16; 3], n: [f32x16; 3], has_n: f32x16) -> f32x16 {
+    let (zero, one) = (f32x16::splat(0.0), f32x16::splat(1.0));
+    let d = [p[0] - b.center[0], p[1] - b.center[1], p[2] - b.center[2]];
+    let dc2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    let radius = b.radius;
+    let r2 = radius * radius;
+    let (phi, cos_e) = (b.phi, b.cos_e);
+    // Inside the bounding sphere every direction is possible: θ' = θ'ᵢ = 0.
+    let inside = dc2.simd_le(r2);
+    let inside_importance = cos_e.simd_lt(one).select(
+        (phi / r2.max(f32x16::splat(1e-20))).min(f32x16::splat(f32::MAX)),
+        zero,
+    );
+
+    let inv = one / dc2.sqrt();
+    // Unit direction from the lights to p; the half-angle θb of the cone of directions
+    // from p that the bounding sphere subtends.
+    let wi = [d[0] * inv, d[1] * inv, d[2] * inv];
+    let sin_b = radius * inv;
+    let cos_b = safe_sqrt16(one - sin_b * sin_b);
+    let w = b.w;
+    let cos_w = w[0] * wi[0] + w[1] * wi[1] + w[2] * wi[2];
+    let cos_w = b.two_sided.select(cos_w.abs(), cos_w);
+    let sin_w = safe_sqrt16(one - cos_w * cos_w);
+    // θ' = max(0, θw − θo − θb).
+    let (sin_o, cos_o) = (b.sin_o, b.cos_o);
+    let cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, cos_o);
+    let sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, cos_o);
+    let cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
+    let importance = phi * cos_p * (inv * inv);
+    let cos_i = (wi[0] * n[0] + wi[1] * n[1] + wi[2] * n[2]).abs();
+    let sin_i = safe_sqrt16(one - cos_i * cos_i);
+    let importance = has_n.select(
+        importance * cos_sub_clamped(sin_i, cos_i, sin_b, cos_b),
+        importance,
+    );
+    // f32::clamp(0, MAX), which keeps a NaN.
+    let clamped = importance.max(zero).min(f32x16::splat(f32::MAX));
+    let importance = importance.is_nan().select(importance, clamped);
+    let outside = cos_p.simd_le(cos_e).select(zero, importance);
+    inside.select(inside_importance, outside)
 }
 
 /// `sqrt(max(x, 0))` per lane.
@@ -425,6 +488,34 @@ struct Node {
     slot: u32,
 }
 
+impl Node {
+    /// The weights of the children from (`p`, `n`) and their sum (none needed with one
+    /// child).
+    #[inline(always)]
+    fn weights(&self, p: Vec3, n: Vec3) -> ([f32; WIDTH], f32) {
+        if self.count > 1 {
+            self.children.weights(p, n, self.count as usize)
+        } else {
+            ([1.0; WIDTH], 1.0)
+        }
+    }
+
+    /// One step of the walk down: the child chosen with the value `u` given the children's
+    /// `weights`, with `u` made afresh from what is left of it and `pmf` multiplied by the
+    /// choice's probability.
+    #[inline(always)]
+    fn step(&self, (c, sum): &([f32; WIDTH], f32), u: &mut f32, pmf: &mut f32) -> u32 {
+        let count = self.count as usize;
+        if count == 1 {
+            return self.child[0];
+        }
+        let (k, t) = choose(&c[..count], *u * sum);
+        *u = (t / c[k]).clamp(0.0, ONE_MINUS_EPSILON);
+        *pmf *= c[k] / sum;
+        self.child[k]
+    }
+}
+
 /// A node of the binary tree the builder makes first (pbrt-v4's tree), before
 /// [`LightBvh::collapse`] turns it into one of [`WIDTH`] children per node.
 enum BinaryNode {
@@ -567,37 +658,149 @@ impl LightBvh {
         if self.nodes.is_empty() {
             return None;
         }
-        let mut u = ((u - p_inf) / (1.0 - p_inf)).min(ONE_MINUS_EPSILON);
-        let mut pmf = 1.0 - p_inf;
-        let mut index = 0usize;
+        let u = ((u - p_inf) / (1.0 - p_inf)).min(ONE_MINUS_EPSILON);
+        Some(self.descend(0, p, n, u, 1.0 - p_inf))
+    }
+
+    /// The walk of [`LightBvh::sample`] down from node `index`, reached with the value `u`
+    /// and probability `pmf`.
+    #[inline]
+    fn descend(
+        &self,
+        mut index: usize,
+        p: Vec3,
+        n: Vec3,
+        mut u: f32,
+        mut pmf: f32,
+    ) -> (usize, f32) {
         loop {
             let node = &self.nodes[index];
-            let count = node.count as usize;
-            let k = if count == 1 {
-                0
-            } else {
-                let (c, sum) = node.children.weights(p, n, count);
-                // The child whose interval of the running sum of the weights holds u · sum;
-                // past the end (by round-off), the last one with a chance.
-                let mut t = u * sum;
-                let mut k = 0;
-                while k + 1 < count && !(t < c[k]) {
-                    t -= c[k];
-                    k += 1;
-                }
-                while c[k] == 0.0 && k > 0 {
-                    k -= 1;
-                }
-                u = (t / c[k]).clamp(0.0, ONE_MINUS_EPSILON);
-                pmf *= c[k] / sum;
-                k
-            };
-            let child = node.child[k];
+            let child = node.step(&node.weights(p, n), &mut u, &mut pmf);
             if child & LEAF != 0 {
-                return Some(((child & !LEAF) as usize, pmf));
+                return ((child & !LEAF) as usize, pmf);
             }
             index = child as usize;
         }
+    }
+
+    /// [`LightBvh::sample`] for the lanes `active` of the points `p`, normals `n` and values
+    /// `u`, into `out` (the other lanes untouched): the same choices and probabilities, bit
+    /// for bit, found level by level for all the lanes together. Each level first weighs
+    /// every lane's node, then walks each lane's choice: the weighings (a chain of square
+    /// roots and divisions each) overlap instead of waiting, lane after lane, behind the
+    /// previous lane's mispredicted walk. At the root, when there are at least as many lanes
+    /// as children, the children are weighed for all the lanes at once, child by child (one
+    /// 16-wide importance per child instead of one per lane).
+    pub fn sample_lanes(
+        &self,
+        active: u32,
+        p: Vec3s,
+        n: Vec3s,
+        u: f32x16,
+        out: &mut [Option<(usize, f32)>; WIDTH],
+    ) {
+        let p_inf = self.p_infinite;
+        // Lanes that choose a light at infinity go alone (no walk).
+        let bounded = active & !u.simd_lt(f32x16::splat(p_inf)).to_bitmask();
+        for k in lanes_of(active & !bounded) {
+            out[k] = self.sample(p.lane(k), n.lane(k), u.lane(k));
+        }
+        if bounded == 0 || self.nodes.is_empty() {
+            return;
+        }
+        // Per lane: its node, value and probability so far.
+        let mut node = [0u32; WIDTH];
+        let mut u = ((u - f32x16::splat(p_inf)) / f32x16::splat(1.0 - p_inf))
+            .min(f32x16::splat(ONE_MINUS_EPSILON))
+            .to_array();
+        let mut pmf = [1.0 - p_inf; WIDTH];
+        let mut walking = bounded;
+        let root = &self.nodes[0];
+        if root.count > 1 && bounded.count_ones() >= root.count {
+            walking = self.root_lanes(walking, p, n, &mut u, &mut pmf, &mut node, out);
+        }
+        let mut weights = [([0.0f32; WIDTH], 0.0f32); WIDTH];
+        while walking != 0 {
+            for l in lanes_of(walking) {
+                weights[l] = self.nodes[node[l] as usize].weights(p.lane(l), n.lane(l));
+            }
+            for l in lanes_of(walking) {
+                let nd = &self.nodes[node[l] as usize];
+                let child = nd.step(&weights[l], &mut u[l], &mut pmf[l]);
+                if child & LEAF != 0 {
+                    out[l] = Some(((child & !LEAF) as usize, pmf[l]));
+                    walking &= !(1 << l);
+                } else {
+                    node[l] = child;
+                }
+            }
+        }
+    }
+
+    /// The root's step of [`LightBvh::sample_lanes`] for the lanes `lanes`, its children
+    /// weighed child by child over the lanes: lanes that reach a light primitive get it in
+    /// `out`, the others their child node in `node`; returns the latter.
+    #[allow(clippy::too_many_arguments)]
+    fn root_lanes(
+        &self,
+        lanes: u32,
+        p: Vec3s,
+        n: Vec3s,
+        u: &mut [f32; WIDTH],
+        pmf: &mut [f32; WIDTH],
+        node: &mut [u32; WIDTH],
+        out: &mut [Option<(usize, f32)>; WIDTH],
+    ) -> u32 {
+        let root = &self.nodes[0];
+        let count = root.count as usize;
+        let zero = f32x16::splat(0.0);
+        let has_n = !(n.x.simd_eq(zero) & n.y.simd_eq(zero) & n.z.simd_eq(zero));
+        let (p, n) = ([p.x, p.y, p.z], [n.x, n.y, n.z]);
+        let mut c = [zero; WIDTH];
+        for (k, c) in c[..count].iter_mut().enumerate() {
+            *c = importance(&root.children.child(k), p, n, has_n);
+        }
+        let sum = c[1..count].iter().fold(c[0], |sum, &v| sum + v);
+        // Lanes where no child has any importance weigh the children by power.
+        let by_importance = sum.simd_gt(zero) & sum.is_finite();
+        let phi = &root.children.phi;
+        for (c, &phi) in c[..count].iter_mut().zip(phi) {
+            *c = by_importance.select(*c, f32x16::splat(phi));
+        }
+        let sum = by_importance.select(sum, f32x16::splat(running_sum(&phi[..count])));
+        // `choose` in lanes: each lane steps past child k while t ≥ its weight.
+        let mut t = f32x16::new(*u) * sum;
+        let mut going = !zero.simd_lt(zero);
+        let mut k = zero;
+        for &ck in &c[..count - 1] {
+            going = going & !t.simd_lt(ck);
+            t = going.select(t - ck, t);
+            k = going.select(k + f32x16::splat(1.0), k);
+        }
+        let (c, sum, t, k) = (
+            c.map(|c| c.to_array()),
+            sum.to_array(),
+            t.to_array(),
+            k.to_array(),
+        );
+        let mut walking = lanes;
+        for l in lanes_of(lanes) {
+            // The rest of `choose` and of the scalar step, lane by lane.
+            let mut k = k[l] as usize;
+            while c[k][l] == 0.0 && k > 0 {
+                k -= 1;
+            }
+            u[l] = (t[l] / c[k][l]).clamp(0.0, ONE_MINUS_EPSILON);
+            pmf[l] *= c[k][l] / sum[l];
+            let child = root.child[k];
+            if child & LEAF != 0 {
+                out[l] = Some(((child & !LEAF) as usize, pmf[l]));
+                walking &= !(1 << l);
+            } else {
+                node[l] = child;
+            }
+        }
+        walking
     }
 
     /// Probability that [`LightBvh::sample`] chooses light primitive `prim` from (`p`, `n`).

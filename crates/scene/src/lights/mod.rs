@@ -280,6 +280,29 @@ impl Lights {
         }
     }
 
+    /// [`Lights::sample`] for the lanes `active` of the points `p`, normals `n` and values
+    /// `u`, into `out` (the other lanes untouched).
+    #[inline]
+    pub fn sample_lanes(
+        &self,
+        active: u32,
+        p: Vec3s,
+        n: Vec3s,
+        u: f32x16,
+        out: &mut [Option<(usize, f32)>; LIGHT_LANES],
+    ) {
+        if let Selector::Bvh(b) = &self.selector {
+            return b.sample_lanes(active, p, n, u, out);
+        }
+        for k in lanes_of(active) {
+            let ctx = LightContext {
+                p: p.lane(k),
+                n: n.lane(k),
+            };
+            out[k] = self.sample(&ctx, u.lane(k));
+        }
+    }
+
     /// Probability that [`Lights::sample`] chooses light primitive `index` from `ctx`.
     #[inline]
     pub fn pmf(&self, ctx: &LightContext, index: usize) -> f32 {
@@ -427,12 +450,10 @@ impl Scene {
         // the scalar sample is inlined once).
         let mut scalar = 0u32;
         out.valid &= !active;
+        let mut choices = [None; LIGHT_LANES];
+        self.lights.sample_lanes(active, p, n, u_sel, &mut choices);
         for k in lanes_of(active) {
-            let ctx = LightContext {
-                p: p.lane(k),
-                n: n.lane(k),
-            };
-            let Some((index, prim_pmf)) = self.lights.sample(&ctx, u_sel.lane(k)) else {
+            let Some((index, prim_pmf)) = choices[k] else {
                 continue;
             };
             let prim = self.lights.prim(index);

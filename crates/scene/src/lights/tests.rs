@@ -1516,3 +1516,92 @@ fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
         "{in_lanes} samples of {total} queries"
     );
 }
+
+#[test]
+fn bvh_choices_in_lanes_are_the_scalar_ones_bit_for_bit() {
+    use crate::lights::LIGHT_LANES;
+    use radia_math::lanes::{f32x16, Vec3s};
+    use rand::Rng;
+    let mut rng = rand_pcg::Pcg32::new(7, 11);
+    // A root of a few children (weighed child by child over the lanes), with and without
+    // lights at infinity, and the 60-light tree of several levels.
+    let few = |with_infinite: bool| {
+        let mut shapes = vec![
+            emitting(
+                sphere(Vec3::new(-2.0, 0.5, 1.0), 0.3, false),
+                Vec3::splat(2.0),
+            ),
+            emitting(
+                sphere(Vec3::new(1.0, 2.0, -1.0), 0.1, false),
+                Vec3::splat(9.0),
+            ),
+            emitting(
+                disk(Vec3::new(0.0, 2.0, 1.0), 0.4, -Vec3::Y),
+                Vec3::splat(3.0),
+            ),
+            emitting(
+                disk(Vec3::new(3.0, 0.0, 0.0), 0.2, Vec3::X),
+                Vec3::splat(5.0),
+            ),
+        ];
+        shapes.push(emitting(rectangle(0.5), Vec3::splat(4.0)));
+        let env = if with_infinite {
+            vec![EmitterDesc::Constant {
+                radiance: Vec3::splat(0.2),
+            }]
+        } else {
+            vec![]
+        };
+        scene(shapes, env, LightSamplerKind::Bvh)
+    };
+    let scenes = [
+        few(false),
+        few(true),
+        many_lights(LightSamplerKind::Bvh, false),
+        many_lights(LightSamplerKind::Bvh, true),
+    ];
+    let mut chosen = 0;
+    for s in &scenes {
+        for round in 0..600 {
+            let ctx: [LightContext; LIGHT_LANES] = std::array::from_fn(|k| {
+                let r = 10f32.powf(rng.random_range(-3.0..2.0));
+                let d = warp::square_to_uniform_sphere(Vec2::new(rng.random(), rng.random()));
+                let n = warp::square_to_uniform_sphere(Vec2::new(rng.random(), rng.random()));
+                LightContext {
+                    p: Vec3::new(0.0, 1.0, 0.0) + d * r,
+                    // Some points without a normal (the receiver's cosine left out).
+                    n: if k % 5 == 0 { Vec3::ZERO } else { n },
+                }
+            });
+            // Values at the ends of [0, 1) as well.
+            let u: [f32; LIGHT_LANES] = std::array::from_fn(|k| match (round + k) % 7 {
+                0 => 0.0,
+                1 => 1.0 - f32::EPSILON / 2.0,
+                _ => rng.random(),
+            });
+            // All lanes (the root weighed over the lanes), or a random set.
+            let active = if round % 2 == 0 {
+                0xffff
+            } else {
+                rng.random::<u32>() & 0xffff
+            };
+            let stale = Some((usize::MAX, -1.0f32));
+            let mut out = [stale; LIGHT_LANES];
+            let p = Vec3s::from_fn(|k| ctx[k].p);
+            let n = Vec3s::from_fn(|k| ctx[k].n);
+            s.lights
+                .sample_lanes(active, p, n, f32x16::new(u), &mut out);
+            for k in 0..LIGHT_LANES {
+                let want = if active & (1 << k) != 0 {
+                    s.lights.sample(&ctx[k], u[k])
+                } else {
+                    stale
+                };
+                let bits = |c: Option<(usize, f32)>| c.map(|(i, pmf)| (i, pmf.to_bits()));
+                assert_eq!(bits(out[k]), bits(want), "lane {k} at {:?}", ctx[k]);
+                chosen += usize::from(want.is_some() && active & (1 << k) != 0);
+            }
+        }
+    }
+    assert!(chosen > 4 * 600 * 10, "{chosen} lights chosen");
+}
