@@ -284,7 +284,7 @@ fn coherent_packets_match_single_rays_and_brute_force() {
     );
 }
 
-/// (c) Spheres and disks (analytic, tested lane by lane) among triangles.
+/// (c) Spheres and disks (analytic, tested in lanes) among triangles.
 #[test]
 fn analytic_shapes_in_packets_match_single_rays() {
     let mut rng = Pcg64::seed_from_u64(3);

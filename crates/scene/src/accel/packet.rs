@@ -591,15 +591,17 @@ mod kernel {
     ) {
         if accel.analytic_lanes(prim) & 1 != 0 {
             let shape = &shapes[accel.owners[prim][0] as usize];
-            if let ShapeKind::Sphere { center, radius, .. } = shape.kind {
-                for half in 0..2 {
-                    let part = (lanes >> (8 * half)) as u8;
-                    if part != 0 {
-                        sphere::<ANY_HIT>(r, st, prim, center, radius, half, part);
+            match &shape.kind {
+                &ShapeKind::Sphere { center, radius, .. } => {
+                    for half in 0..2 {
+                        let part = (lanes >> (8 * half)) as u8;
+                        if part != 0 {
+                            sphere::<ANY_HIT>(r, st, prim, center, radius, half, part);
+                        }
                     }
                 }
-            } else {
-                one_by_one::<ANY_HIT>(accel, shapes, r, st, prim, lanes);
+                ShapeKind::Disk { to_local, .. } => disk::<ANY_HIT>(r, st, prim, to_local, lanes),
+                _ => one_by_one::<ANY_HIT>(accel, shapes, r, st, prim, lanes),
             }
             return;
         }
@@ -678,6 +680,52 @@ mod kernel {
             store_u32_where(&mut st.inner, m, 0);
         }
     }
+    /// The disk `prim` (`to_local`: from the world to the unit disk's frame) against the lanes
+    /// `lanes`: `intersect_disk` (`accel.rs`) in lanes, with its operations in its order
+    /// (glam's affine transform: the columns' products summed left to right, then the
+    /// translation; no FMA), so that every lane gets the scalar test's bits.
+    #[inline(always)]
+    fn disk<const ANY_HIT: bool>(
+        r: &PacketRay,
+        st: &mut State,
+        prim: usize,
+        to_local: &glam::Affine3A,
+        lanes: u32,
+    ) {
+        let m = &to_local.matrix3;
+        let columns = [m.x_axis, m.y_axis, m.z_axis];
+        let transform = |v: &[F16; 3], c: usize| {
+            F16::splat(columns[0][c]) * v[0]
+                + F16::splat(columns[1][c]) * v[1]
+                + F16::splat(columns[2][c]) * v[2]
+        };
+        let d = [0, 1, 2].map(|a| F16::load(&r.packet.d[a]));
+        let translation = to_local.translation;
+        let o = [0, 1, 2].map(|c| transform(&r.o, c) + F16::splat(translation[c]));
+        let d = [0, 1, 2].map(|c| transform(&d, c));
+        // `-o.z / d.z`: 0 − o.z differs from −o.z only in the sign of a zero, and a zero t
+        // is no hit either way.
+        let zero = F16::zero();
+        let t = (zero - o[2]) / d[2];
+        let in_range = t.gt(zero) & t.lt(F16::load(&st.t));
+        let (x, y) = (o[0] + d[0] * t, o[1] + d[1] * t);
+        let inside = (x * x + y * y).le(F16::splat(1.0));
+        let hit = (in_range & inside).bits() & lanes as u16;
+        if hit == 0 {
+            return;
+        }
+        st.hit |= hit as u32;
+        if ANY_HIT {
+            st.live &= !(hit as u32);
+        } else {
+            t.store_where(&mut st.t, hit);
+            zero.store_where(&mut st.b1, hit);
+            zero.store_where(&mut st.b2, hit);
+            store_u32_where(&mut st.prim, hit, prim as u32);
+            store_u32_where(&mut st.inner, hit, 0);
+        }
+    }
+
     /// Primitive `prim` by the scalar test, lane by lane.
     #[inline(never)]
     fn one_by_one<const ANY_HIT: bool>(
