@@ -20,6 +20,7 @@
 
 use crate::ShadingPointR;
 use glam::{Vec2, Vec3};
+use radia_math::lanes::f32x16;
 use radia_math::real::{select_lazy, select_or_branch, Mask, Real, Vector2, Vector3};
 use radia_math::{trig, PI};
 use radia_sampling::warp;
@@ -198,9 +199,22 @@ impl MicrofacetDistribution {
         mut f: impl FnMut(usize, usize, Vec3),
     ) {
         if !(self.sample_visible && self.kind == MicrofacetType::Beckmann) {
+            // Sixteen normals of a row at once (each lane the scalar sample's bits), without
+            // the densities that `sample` would make alongside: GGX's visible normals are
+            // not separable.
+            let d = self.splat::<f32x16>();
+            let wi16 = Vector3::splat(wi);
             for (i, &x) in xs.iter().enumerate() {
-                for (j, &y) in ys.iter().enumerate() {
-                    f(i, j, self.sample(wi, Vec2::new(x, y)).0);
+                for (chunk, ys) in ys.chunks(16).enumerate() {
+                    let y = f32x16::new(std::array::from_fn(|l| ys[l.min(ys.len() - 1)]));
+                    let m = d.sample_normal(wi16, Vector2::new(f32x16::splat(x), y));
+                    for l in 0..ys.len() {
+                        f(
+                            i,
+                            16 * chunk + l,
+                            Vec3::new(m.x.lane(l), m.y.lane(l), m.z.lane(l)),
+                        );
+                    }
                 }
             }
             return;
@@ -329,6 +343,17 @@ impl<R: Real> MicrofacetDistributionR<R> {
         }
     }
 
+    /// The normal [`Self::sample`] draws, without its density.
+    #[inline(always)]
+    pub fn sample_normal(&self, wi: Vector3<R>, u: Vector2<R>) -> Vector3<R> {
+        if self.sample_visible {
+            let (m, finite) = self.visible_normal(wi, u);
+            select_or_branch(finite, || m, || Vector3::splat(Vec3::Z))
+        } else {
+            self.sample_all_normals(u).0
+        }
+    }
+
     /// D(m) cos θ_m sampling (Walter et al. 2007), isotropic or anisotropic.
     #[inline(always)]
     fn sample_all_normals(&self, u: Vector2<R>) -> (Vector3<R>, R) {
@@ -381,14 +406,20 @@ impl<R: Real> MicrofacetDistributionR<R> {
     /// sample slopes there, rotate and unstretch.
     #[inline(always)]
     fn sample_visible_normal(&self, wi: Vector3<R>, u: Vector2<R>) -> (Vector3<R>, R) {
-        let wi_p = self.stretched(wi);
-        let (sin_phi, cos_phi) = sincos_phi(wi_p);
-        let slope = self.sample_visible_11(wi_p.z, u);
-        let (m, finite) = self.unstretch(sin_phi, cos_phi, slope);
+        let (m, finite) = self.visible_normal(wi, u);
         // Almost always finite: for one path a branch, not a select on the chain to D(m).
         let m = select_or_branch(finite, || m, || Vector3::splat(Vec3::Z));
         let pdf = self.eval(m) * self.visible_g1(wi, m) * wi.dot(m).abs() / wi.z;
         (m, select_or_branch(finite, || pdf, R::zero))
+    }
+
+    /// The visible normal of [`Self::sample_visible_normal`], and where it is finite.
+    #[inline(always)]
+    fn visible_normal(&self, wi: Vector3<R>, u: Vector2<R>) -> (Vector3<R>, R::Mask) {
+        let wi_p = self.stretched(wi);
+        let (sin_phi, cos_phi) = sincos_phi(wi_p);
+        let slope = self.sample_visible_11(wi_p.z, u);
+        self.unstretch(sin_phi, cos_phi, slope)
     }
 
     /// The normal of the α = 1 slopes `slope`, rotated to wi's azimuth (φ given by its sine
