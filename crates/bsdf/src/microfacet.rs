@@ -835,4 +835,42 @@ mod tests {
         );
         assert!((hc - d.smith_g1(wo, (Vec3::Z + wo).normalize())).abs() < 1e-6);
     }
+
+    #[test]
+    fn the_grid_of_visible_normals_is_the_samples_bit_for_bit() {
+        // 37 columns: two chunks of sixteen lanes and a remainder; values at 0 and near 1.
+        let xs: Vec<f32> = (0..13).map(|i| (i as f32 / 12.0).min(0.999_999)).collect();
+        let ys: Vec<f32> = (0..37).map(|j| (j as f32 / 36.0).min(0.999_999)).collect();
+        let mut checked = 0;
+        for kind in [MicrofacetType::Beckmann, MicrofacetType::Ggx] {
+            for visible in [true, false] {
+                for (au, av) in [
+                    (1e-4, 1e-4),
+                    (0.05, 0.05),
+                    (0.3, 0.3),
+                    (1.0, 1.0),
+                    (0.1, 0.6),
+                ] {
+                    let d = MicrofacetDistribution::new(kind, au, av, visible);
+                    for wi in [
+                        Vec3::Z,
+                        Vec3::new(0.6, 0.0, 0.8),
+                        Vec3::new(0.3, -0.5, 0.2).normalize(),
+                        Vec3::new(1.0, 0.0, 1e-4).normalize(),
+                    ] {
+                        d.visible_normals_grid(wi, &xs, &ys, |i, j, m| {
+                            let want = d.sample(wi, Vec2::new(xs[i], ys[j])).0;
+                            assert_eq!(
+                                m.to_array().map(f32::to_bits),
+                                want.to_array().map(f32::to_bits),
+                                "{kind:?} visible {visible} α ({au}, {av}) wi {wi} at ({i}, {j})"
+                            );
+                            checked += 1;
+                        });
+                    }
+                }
+            }
+        }
+        assert_eq!(checked, 2 * 2 * 5 * 4 * xs.len() * ys.len());
+    }
 }
