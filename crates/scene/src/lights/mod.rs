@@ -291,15 +291,17 @@ impl Lights {
         u: f32x16,
         out: &mut [Option<(usize, f32)>; LIGHT_LANES],
     ) {
-        if let Selector::Bvh(b) = &self.selector {
-            return b.sample_lanes(active, p, n, u, out);
-        }
-        for k in lanes_of(active) {
-            let ctx = LightContext {
-                p: p.lane(k),
-                n: n.lane(k),
-            };
-            out[k] = self.sample(&ctx, u.lane(k));
+        match &self.selector {
+            Selector::Empty => lanes_of(active).for_each(|k| out[k] = None),
+            Selector::Single => lanes_of(active).for_each(|k| out[k] = Some((0, 1.0))),
+            Selector::Table(t) => {
+                let u = u.to_array();
+                for k in lanes_of(active) {
+                    let s = t.sample(u[k]);
+                    out[k] = Some((s.index, s.pmf));
+                }
+            }
+            Selector::Bvh(b) => b.sample_lanes(active, p, n, u, out),
         }
     }
 
