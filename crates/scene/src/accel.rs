@@ -490,14 +490,9 @@ impl Accel {
             bits
         });
         let flat = total <= Self::FLAT_MAX;
-        // Triangles and spheres are tested against a packet's lanes at once; disks and
-        // instances lane by lane, so a flat scene of those only is traced ray by ray.
-        let lane_tested = |si: u32| {
-            matches!(
-                shapes[si as usize].kind,
-                ShapeKind::Mesh(_) | ShapeKind::Sphere { .. }
-            )
-        };
+        // Triangles, spheres and disks are tested against a packet's lanes at once;
+        // instances lane by lane, so a flat scene of instances only is traced ray by ray.
+        let lane_tested = |si: u32| !matches!(shapes[si as usize].kind, ShapeKind::Instance(_));
         let packets_pay = !flat || members.iter().any(|&si| lane_tested(si));
         Self {
             bvh,

@@ -260,8 +260,8 @@ impl Accel {
         self.occluded_packet_with(shapes, rays, &PacketRules::DEFAULT)
     }
 
-    /// Whether tracing rays as packets can save anything here: not in a flat scene of disks
-    /// and instances only (tested lane by lane), whose packets go ray by ray. (Before
+    /// Whether tracing rays as packets can save anything here: not in a flat scene of
+    /// instances only (tested lane by lane), whose packets go ray by ray. (Before
     /// spheres were tested against the lanes at once, the packet's set-up made
     /// `scenes/envmap.xml`, three spheres and a disk, 15% slower than ray by ray; with them,
     /// 0.90 of ray by ray.)
