@@ -516,6 +516,29 @@ impl Node {
     }
 }
 
+/// The walks of [`LightBvh::sample_lanes`], per lane: its node, value and probability so far.
+struct Walk {
+    node: [u32; WIDTH],
+    u: [f32; WIDTH],
+    pmf: [f32; WIDTH],
+    /// Lanes still walking.
+    walking: u32,
+}
+
+impl Walk {
+    /// Lane `l` goes on to `child`: a light primitive is its answer in `out`, and its walk
+    /// ends; a node is where it goes next.
+    #[inline(always)]
+    fn arrive(&mut self, l: usize, child: u32, out: &mut [Option<(usize, f32)>; WIDTH]) {
+        if child & LEAF != 0 {
+            out[l] = Some(((child & !LEAF) as usize, self.pmf[l]));
+            self.walking &= !(1 << l);
+        } else {
+            self.node[l] = child;
+        }
+    }
+}
+
 /// A node of the binary tree the builder makes first (pbrt-v4's tree), before
 /// [`LightBvh::collapse`] turns it into one of [`WIDTH`] children per node.
 enum BinaryNode {
@@ -658,26 +681,14 @@ impl LightBvh {
         if self.nodes.is_empty() {
             return None;
         }
-        let u = ((u - p_inf) / (1.0 - p_inf)).min(ONE_MINUS_EPSILON);
-        Some(self.descend(0, p, n, u, 1.0 - p_inf))
-    }
-
-    /// The walk of [`LightBvh::sample`] down from node `index`, reached with the value `u`
-    /// and probability `pmf`.
-    #[inline]
-    fn descend(
-        &self,
-        mut index: usize,
-        p: Vec3,
-        n: Vec3,
-        mut u: f32,
-        mut pmf: f32,
-    ) -> (usize, f32) {
+        let mut u = ((u - p_inf) / (1.0 - p_inf)).min(ONE_MINUS_EPSILON);
+        let mut pmf = 1.0 - p_inf;
+        let mut index = 0;
         loop {
             let node = &self.nodes[index];
             let child = node.step(&node.weights(p, n), &mut u, &mut pmf);
             if child & LEAF != 0 {
-                return ((child & !LEAF) as usize, pmf);
+                return Some(((child & !LEAF) as usize, pmf));
             }
             index = child as usize;
         }
@@ -708,49 +719,40 @@ impl LightBvh {
         if bounded == 0 || self.nodes.is_empty() {
             return;
         }
-        // Per lane: its node, value and probability so far.
-        let mut node = [0u32; WIDTH];
-        let mut u = ((u - f32x16::splat(p_inf)) / f32x16::splat(1.0 - p_inf))
-            .min(f32x16::splat(ONE_MINUS_EPSILON))
-            .to_array();
-        let mut pmf = [1.0 - p_inf; WIDTH];
-        let mut walking = bounded;
+        let u = ((u - f32x16::splat(p_inf)) / f32x16::splat(1.0 - p_inf))
+            .min(f32x16::splat(ONE_MINUS_EPSILON));
+        let mut walk = Walk {
+            node: [0; WIDTH],
+            u: u.to_array(),
+            pmf: [1.0 - p_inf; WIDTH],
+            walking: bounded,
+        };
         let root = &self.nodes[0];
         if root.count > 1 && bounded.count_ones() >= root.count {
-            walking = self.root_lanes(walking, p, n, &mut u, &mut pmf, &mut node, out);
+            self.root_lanes(p, n, &mut walk, out);
         }
         let mut weights = [([0.0f32; WIDTH], 0.0f32); WIDTH];
-        while walking != 0 {
-            for l in lanes_of(walking) {
-                weights[l] = self.nodes[node[l] as usize].weights(p.lane(l), n.lane(l));
+        while walk.walking != 0 {
+            for l in lanes_of(walk.walking) {
+                weights[l] = self.nodes[walk.node[l] as usize].weights(p.lane(l), n.lane(l));
             }
-            for l in lanes_of(walking) {
-                let nd = &self.nodes[node[l] as usize];
-                let child = nd.step(&weights[l], &mut u[l], &mut pmf[l]);
-                if child & LEAF != 0 {
-                    out[l] = Some(((child & !LEAF) as usize, pmf[l]));
-                    walking &= !(1 << l);
-                } else {
-                    node[l] = child;
-                }
+            for l in lanes_of(walk.walking) {
+                let nd = &self.nodes[walk.node[l] as usize];
+                let child = nd.step(&weights[l], &mut walk.u[l], &mut walk.pmf[l]);
+                walk.arrive(l, child, out);
             }
         }
     }
 
-    /// The root's step of [`LightBvh::sample_lanes`] for the lanes `lanes`, its children
-    /// weighed child by child over the lanes: lanes that reach a light primitive get it in
-    /// `out`, the others their child node in `node`; returns the latter.
-    #[allow(clippy::too_many_arguments)]
+    /// The root's step of [`LightBvh::sample_lanes`] for the lanes of `walk` (all at the
+    /// root), its children weighed child by child over the lanes.
     fn root_lanes(
         &self,
-        lanes: u32,
         p: Vec3s,
         n: Vec3s,
-        u: &mut [f32; WIDTH],
-        pmf: &mut [f32; WIDTH],
-        node: &mut [u32; WIDTH],
+        walk: &mut Walk,
         out: &mut [Option<(usize, f32)>; WIDTH],
-    ) -> u32 {
+    ) {
         let root = &self.nodes[0];
         let count = root.count as usize;
         let zero = f32x16::splat(0.0);
@@ -769,7 +771,7 @@ impl LightBvh {
         }
         let sum = by_importance.select(sum, f32x16::splat(running_sum(&phi[..count])));
         // `choose` in lanes: each lane steps past child k while t ≥ its weight.
-        let mut t = f32x16::new(*u) * sum;
+        let mut t = f32x16::new(walk.u) * sum;
         let mut going = !zero.simd_lt(zero);
         let mut k = zero;
         for &ck in &c[..count - 1] {
@@ -783,24 +785,16 @@ impl LightBvh {
             t.to_array(),
             k.to_array(),
         );
-        let mut walking = lanes;
-        for l in lanes_of(lanes) {
+        for l in lanes_of(walk.walking) {
             // The rest of `choose` and of the scalar step, lane by lane.
             let mut k = k[l] as usize;
             while c[k][l] == 0.0 && k > 0 {
                 k -= 1;
             }
-            u[l] = (t[l] / c[k][l]).clamp(0.0, ONE_MINUS_EPSILON);
-            pmf[l] *= c[k][l] / sum[l];
-            let child = root.child[k];
-            if child & LEAF != 0 {
-                out[l] = Some(((child & !LEAF) as usize, pmf[l]));
-                walking &= !(1 << l);
-            } else {
-                node[l] = child;
-            }
+            walk.u[l] = (t[l] / c[k][l]).clamp(0.0, ONE_MINUS_EPSILON);
+            walk.pmf[l] *= c[k][l] / sum[l];
+            walk.arrive(l, root.child[k], out);
         }
-        walking
     }
 
     /// Probability that [`LightBvh::sample`] chooses light primitive `prim` from (`p`, `n`).
