@@ -349,6 +349,9 @@ pub struct Accel {
     /// With a handful of primitives the box tests of a traversal cost more than they save:
     /// every query tests them all directly ([`Accel::FLAT_MAX`]).
     flat: bool,
+    /// Packets test every primitive directly too: a flat scene, or one of at most
+    /// [`Accel::PACKET_FLAT_MAX`] primitives without instances.
+    packets_flat: bool,
     /// Whether 16-ray packets share any work here ([`Accel::packets_pay`]).
     packets_pay: bool,
     /// The bottom level of a two-level structure: one BVH per shape group, over the group's
@@ -433,6 +436,7 @@ impl Accel {
                 analytic: None,
                 depth: 0,
                 flat: false,
+                packets_flat: false,
                 packets_pay: false,
                 groups,
             };
@@ -494,6 +498,8 @@ impl Accel {
         // instances lane by lane, so a flat scene of instances only is traced ray by ray.
         let lane_tested = |si: u32| !matches!(shapes[si as usize].kind, ShapeKind::Instance(_));
         let packets_pay = !flat || members.iter().any(|&si| lane_tested(si));
+        let packets_flat =
+            flat || (total <= Self::PACKET_FLAT_MAX && members.iter().all(|&si| lane_tested(si)));
         Self {
             bvh,
             owners,
@@ -501,6 +507,7 @@ impl Accel {
             analytic,
             depth,
             flat,
+            packets_flat,
             packets_pay,
             groups,
         }
@@ -567,6 +574,18 @@ impl Accel {
     /// (`scenes/envmap.xml`), but 0.6–1.2% more for eight triangles (`scenes/blend.xml`,
     /// `scenes/rough-conductors.xml`), where the root's box tests still cull whole leaves.
     const FLAT_MAX: usize = 4;
+
+    /// Most primitives a scene without instances may have for its packet queries to skip the
+    /// BVH. A packet tests a triangle against its sixteen lanes in about the time of one
+    /// child box (`accel/packet.rs`), and incoherent lanes, each reaching a few leaves, then
+    /// test those leaves' triangles one lane at a time, so the crossover is far above a
+    /// single ray's. Measured in the path loop (`farm-bench`, 96², 64 spp, `sobol`, one
+    /// thread, CPU time of testing every primitive / of the BVH traversal, median of five, range
+    /// about ±8%): 8 primitives (four spheres and two rectangles: `blend`, `glass`,
+    /// `rough-conductors`) 0.94–0.97; 9–16 (`principled`, `mask`, `twosided`,
+    /// `principledthin`, `veach-mis`) 0.94–0.99; 31 with two spheres and a disk
+    /// (`area-lights`) 1.19; 32 triangles (the Cornell box) 0.90–0.96. So up to sixteen.
+    const PACKET_FLAT_MAX: usize = 16;
 
     /// The closest (with `any_hit`, the first) hit along `ray` among all primitives, without
     /// the BVH ([`Accel::flat`]).

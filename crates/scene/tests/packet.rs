@@ -9,7 +9,8 @@
 //! * (b) the same mesh with coherent, camera-like packets (4×4 pixel tiles);
 //! * (c) a scene of analytic spheres and disks beside triangles;
 //! * (d) a scene with shape-group instances (as `tests/instances.rs`);
-//! * (e) a flat scene (at most four primitives, tested without the BVH).
+//! * (e) a flat scene (at most four primitives, tested without the BVH), and a scene of
+//!   sixteen, which single rays trace through the BVH and packets test directly.
 //!
 //! Packets have random active masks (empty and full ones included) and a mix of finite and
 //! infinite t_max. Each packet is traced with the default hand-off rules and with rules that
@@ -412,10 +413,11 @@ fn instances_in_packets_match_single_rays() {
     assert!(tally.hits > 4 * 6_000, "{tally:?}");
 }
 
-/// (e) A flat scene: two triangles, a sphere and a disk (every query tests all four).
+/// (e) A flat scene: two triangles, a sphere and a disk (every query tests all four); and
+/// the same with a twelve-triangle sphere added (sixteen primitives: single rays take the
+/// BVH, packets test every primitive, `Accel::PACKET_FLAT_MAX`).
 #[test]
 fn flat_scene_packets_match_single_rays() {
-    let mut rng = Pcg64::seed_from_u64(5);
     let quad = Mesh {
         positions: vec![
             Vec3::new(-2.0, -1.0, -2.0),
@@ -426,47 +428,61 @@ fn flat_scene_packets_match_single_rays() {
         indices: vec![[0, 1, 2], [0, 2, 3]],
         ..Default::default()
     };
-    let shapes = vec![
-        Shape::new(Geometry::Mesh(quad), 0, None),
-        Shape::new(
-            Geometry::sphere(Vec3::new(0.3, 0.0, 0.0), 0.8, false),
-            0,
-            None,
-        ),
-        Shape::new(
-            Geometry::Disk {
-                to_world: Affine3A::from_scale_rotation_translation(
-                    Vec3::splat(0.7),
-                    Quat::from_rotation_x(0.4),
-                    Vec3::new(-1.0, 0.5, 0.5),
-                ),
-                flip_normals: false,
-            },
-            0,
-            None,
-        ),
+    let sphere = Shape::new(
+        Geometry::sphere(Vec3::new(0.3, 0.0, 0.0), 0.8, false),
+        0,
+        None,
+    );
+    let disk = Shape::new(
+        Geometry::Disk {
+            to_world: Affine3A::from_scale_rotation_translation(
+                Vec3::splat(0.7),
+                Quat::from_rotation_x(0.4),
+                Vec3::new(-1.0, 0.5, 0.5),
+            ),
+            flip_normals: false,
+        },
+        0,
+        None,
+    );
+    let four = vec![
+        Shape::new(Geometry::Mesh(quad.clone()), 0, None),
+        sphere.clone(),
+        disk.clone(),
     ];
-    let accel = Accel::build(&shapes);
-    assert_eq!(accel.len(), 4);
-    let mut packets = incoherent_packets(&mut rng, 3000);
-    packets.extend(camera_packets(
-        &mut rng,
-        Vec3::new(0.0, 1.0, 5.0),
-        Vec3::ZERO,
-        3000,
-    ));
-    // Rays aimed at the quad's shared diagonal (edge functions exactly zero in places).
-    packets.extend((0..2000).map(|_| {
-        let rays: [Ray; PACKET_LANES] = std::array::from_fn(|_| {
-            let s = rng.random_range(-1.0..1.0f32);
-            let target = Vec3::new(2.0 * s, -1.0, 2.0 * s);
-            let o = target + random_dir(&mut rng) * 3.0;
-            Ray::new(o, (target - o).normalize(), f32::INFINITY)
-        });
-        packet(&rays, 0xffff)
-    }));
-    let tally = check(&accel, &shapes, &packets, true);
-    assert!(tally.hits > 4 * 20_000, "{tally:?}");
+    // The quad and a coarse twelve-triangle sphere beside it.
+    let ring = uv_sphere(Vec3::new(0.8, -0.2, -0.9), 0.6, 2, 3);
+    assert_eq!(ring.indices.len(), 12);
+    let sixteen = vec![
+        Shape::new(Geometry::Mesh(quad.clone()), 0, None),
+        Shape::new(Geometry::Mesh(ring), 0, None),
+        sphere,
+        disk,
+    ];
+    for (shapes, count) in [(four, 4), (sixteen, 16)] {
+        let mut rng = Pcg64::seed_from_u64(5);
+        let accel = Accel::build(&shapes);
+        assert_eq!(accel.len(), count);
+        let mut packets = incoherent_packets(&mut rng, 3000);
+        packets.extend(camera_packets(
+            &mut rng,
+            Vec3::new(0.0, 1.0, 5.0),
+            Vec3::ZERO,
+            3000,
+        ));
+        // Rays aimed at the quad's shared diagonal (edge functions exactly zero in places).
+        packets.extend((0..2000).map(|_| {
+            let rays: [Ray; PACKET_LANES] = std::array::from_fn(|_| {
+                let s = rng.random_range(-1.0..1.0f32);
+                let target = Vec3::new(2.0 * s, -1.0, 2.0 * s);
+                let o = target + random_dir(&mut rng) * 3.0;
+                Ray::new(o, (target - o).normalize(), f32::INFINITY)
+            });
+            packet(&rays, 0xffff)
+        }));
+        let tally = check(&accel, &shapes, &packets, true);
+        assert!(tally.hits > 4 * 20_000, "{count} primitives: {tally:?}");
+    }
 }
 
 fn load(name: &str) -> Scene {

@@ -317,7 +317,7 @@ impl Accel {
         if shared {
             // Deeper trees than the fixed stack allows (pathological geometry, see
             // `Accel::with_stack`) go ray by ray.
-            if self.flat || self.depth < super::wide::STACK_SIZE {
+            if self.packets_flat || self.depth < super::wide::STACK_SIZE {
                 kernel::query::<ANY_HIT>(self, shapes, rays, rules, st);
                 return;
             }
@@ -829,9 +829,9 @@ mod kernel {
         st: &mut State,
     ) {
         let r = PacketRay::new(rays);
-        if accel.flat {
+        if accel.packets_flat {
             // A handful of primitives: every one against the packet, in order (as
-            // `Accel::intersect_flat`).
+            // `Accel::intersect_flat`; see `Accel::PACKET_FLAT_MAX`).
             for prim in 0..accel.len() {
                 if st.live == 0 {
                     return;
