@@ -451,11 +451,11 @@ fn flat_scene_packets_match_single_rays() {
         disk.clone(),
     ];
     // The quad and a coarse twelve-triangle sphere beside it.
-    let ring = uv_sphere(Vec3::new(0.8, -0.2, -0.9), 0.6, 2, 3);
-    assert_eq!(ring.indices.len(), 12);
+    let coarse = uv_sphere(Vec3::new(0.8, -0.2, -0.9), 0.6, 2, 3);
+    assert_eq!(coarse.indices.len(), 12);
     let sixteen = vec![
-        Shape::new(Geometry::Mesh(quad.clone()), 0, None),
-        Shape::new(Geometry::Mesh(ring), 0, None),
+        Shape::new(Geometry::Mesh(quad), 0, None),
+        Shape::new(Geometry::Mesh(coarse), 0, None),
         sphere,
         disk,
     ];

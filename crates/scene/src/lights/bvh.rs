@@ -227,8 +227,8 @@ fn running_sum(x: &[f32]) -> f32 {
 }
 
 /// The child whose interval of the running sum of the weights `c` holds `t` (the sum's
-/// fraction u), and `t` less the weights before it; past the end (by round-off), the last
-/// one with a chance.
+/// fraction u), and `t` less the weights before it (or the last child, past the end by
+/// round-off: [`settle`] then steps back to one with a chance).
 #[inline(always)]
 fn choose(c: &[f32], mut t: f32) -> (usize, f32) {
     let mut k = 0;
@@ -236,10 +236,28 @@ fn choose(c: &[f32], mut t: f32) -> (usize, f32) {
         t -= c[k];
         k += 1;
     }
-    while c[k] == 0.0 && k > 0 {
+    (k, t)
+}
+
+/// The end of a step that stopped at child `k` with `t` left of the value (`weight(i)`: child
+/// i's weight, `sum` their sum): back to the last child with a chance if `k` has none, the
+/// value `u` made afresh from `t`, and `pmf` multiplied by the choice's probability. Returns
+/// the chosen child.
+#[inline(always)]
+fn settle(
+    weight: impl Fn(usize) -> f32,
+    mut k: usize,
+    t: f32,
+    sum: f32,
+    u: &mut f32,
+    pmf: &mut f32,
+) -> usize {
+    while weight(k) == 0.0 && k > 0 {
         k -= 1;
     }
-    (k, t)
+    *u = (t / weight(k)).clamp(0.0, ONE_MINUS_EPSILON);
+    *pmf *= weight(k) / sum;
+    k
 }
 
 /// Light bounds in lanes: sixteen children of a node seen from one point
@@ -510,9 +528,7 @@ impl Node {
             return self.child[0];
         }
         let (k, t) = choose(&c[..count], *u * sum);
-        *u = (t / c[k]).clamp(0.0, ONE_MINUS_EPSILON);
-        *pmf *= c[k] / sum;
-        self.child[k]
+        self.child[settle(|i| c[i], k, t, *sum, u, pmf)]
     }
 }
 
@@ -786,13 +802,9 @@ impl LightBvh {
             k.to_array(),
         );
         for l in lanes_of(walk.walking) {
-            // The rest of `choose` and of the scalar step, lane by lane.
-            let mut k = k[l] as usize;
-            while c[k][l] == 0.0 && k > 0 {
-                k -= 1;
-            }
-            walk.u[l] = (t[l] / c[k][l]).clamp(0.0, ONE_MINUS_EPSILON);
-            walk.pmf[l] *= c[k][l] / sum[l];
+            // The rest of the scalar step, lane by lane.
+            let (u, pmf) = (&mut walk.u[l], &mut walk.pmf[l]);
+            let k = settle(|i| c[i][l], k[l] as usize, t[l], sum[l], u, pmf);
             walk.arrive(l, root.child[k], out);
         }
     }
