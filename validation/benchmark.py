@@ -16,7 +16,9 @@ orthogonal, ldsampler) of each --variants and every radia sampler (the same and
 sobol) renders --spp samples per pixel, rounded as each sampler rounds them (the
 spp actually rendered is reported and used). efficiency = 1 / (relMSE x seconds),
 relMSE corrected for the reference's noise. Each measurement is repeated
-(--repeats): median times, mean relMSE.
+(--repeats): median times; relMSE is the mean over --seeds renders of distinct
+seeds (default twice --repeats; the renders beyond the timed ones are not timed),
+the same count for both renderers.
 
 Timings (wall clock, time.perf_counter):
   radia    render  = the render time radia prints (no loading, no EXR write)
@@ -266,8 +268,10 @@ def _finish_row(row, rels):
     return row
 
 
-def measure_radia(scene, res, spp, sampler, binary, label, threads, ref, repeats, defines=()):
-    """One radia binary and sampler: `repeats` processes with distinct seeds."""
+def measure_radia(scene, res, spp, sampler, binary, label, threads, ref, repeats, seeds,
+                  defines=()):
+    """One radia binary and sampler: `seeds` processes with distinct seeds, the first
+    `repeats` of them timed."""
     r = RadiaRenderer(scene, res, spp, binary=binary, threads=threads, sampler=sampler,
                       rfilter="box", extra_defines=defines)
     # One untimed render first: the first process after Mitsuba's renders ran up to a third
@@ -275,10 +279,10 @@ def measure_radia(scene, res, spp, sampler, binary, label, threads, ref, repeats
     r.render(seed=0, spp=min(spp, 16))
     r.infos.clear()
     rels = []
-    for k in range(repeats):
+    for k in range(max(repeats, seeds)):
         img = r.render(seed=1 + k, spp=spp)
         rels.append(relmse_pair(img, ref))
-    infos = r.infos
+    infos = r.infos[:repeats]
     spps = sorted({i.get("spp") for i in infos})
     render = _median([i.get("render_s") for i in infos])
     row = dict(renderer=label, binary=binary, sampler=sampler, spp_requested=spp,
@@ -290,10 +294,12 @@ def measure_radia(scene, res, spp, sampler, binary, label, threads, ref, repeats
     return _finish_row(row, rels)
 
 
-def measure_mitsuba(scene, res, spp, sampler, variant, threads, ref, repeats, defines=()):
+def measure_mitsuba(scene, res, spp, sampler, variant, threads, ref, repeats, seeds,
+                    defines=()):
     """One Mitsuba variant and sampler: `repeats` times load + cold render (+ a
     warm render for JIT variants) of the scene edited to res, box filter,
-    sampler and spp. relMSE is the mean over every render."""
+    sampler and spp; then untimed renders of further seeds until `seeds` renders.
+    relMSE is the mean over every render."""
     import drjit as dr
     t0 = time.perf_counter()
     mi = mitsuba(variant)
@@ -328,6 +334,12 @@ def measure_mitsuba(scene, res, spp, sampler, variant, threads, ref, repeats, de
             warms.append(t2 - t1)
         if res * res * n > MAX_LANES and jit:
             log(f"  note: {res}x{res} x {n} spp = {res * res * n} lanes in one mi.render")
+        if k + 1 == repeats:
+            # The relMSE of the further seeds (not timed), on the last scene loaded.
+            seed = 2 * repeats + 1
+            while len(rels) < seeds:
+                rels.append(relmse_pair(render(sc, seed=seed), ref))
+                seed += 1
         del sc
     spps = sorted(spps)
     load, cold, warm = _median(loads), _median(colds), _median(warms)
@@ -443,7 +455,8 @@ def efficiency_main(a):
     md = ["# radia vs Mitsuba: efficiency of every sampler\n",
           f"{a.res}x{a.res} px, {a.spp} spp asked (each sampler rounds it; the spp column is what "
           f"it rendered), box filter, {a.threads} threads for both, median of {a.repeats} "
-          f"repeats (relMSE: mean). efficiency = 1 / (relMSE × seconds), relMSE corrected for "
+          f"repeats (relMSE: mean over {a.seeds} seeds). efficiency = 1 / (relMSE × seconds), "
+          f"relMSE corrected for "
           f"the reference's noise; 'incl. load' (the headline): radia's whole process (load, "
           f"BVH, render, EXR write), Mitsuba load + first render (JIT: kernel compilation or "
           f"cache load; Python start-up and `import mitsuba` excluded); 'render only': radia's "
@@ -461,7 +474,7 @@ def efficiency_main(a):
                 for s in (r_samplers if label == "radia" else alt_samplers):
                     try:
                         r = measure_radia(scene, a.res, a.spp, s, binary, label, a.threads,
-                                          ref, a.repeats, a.define)
+                                          ref, a.repeats, a.seeds, a.define)
                     except ValidationError as e:
                         if label == "radia":
                             raise
@@ -475,7 +488,7 @@ def efficiency_main(a):
             for v in variants:
                 for s in m_samplers:
                     r = measure_mitsuba(scene, a.res, a.spp, s, v, a.threads, ref, a.repeats,
-                                        a.define)
+                                        a.seeds, a.define)
                     rows.append(r)
                     log(f"  {'mitsuba ' + v:14s} {s:12s} {r['spp']:>5} spp: total {r['total_s']:7.3f} s "
                         f"(load {r['load_s']:.3f}), render {r['render_s']:7.3f} s, relMSE "
@@ -584,6 +597,11 @@ def main(argv=None):
     ap.add_argument("--repeats", type=int, default=None,
                     help="measurements per sampler, median time, mean relMSE (default 3; "
                          "--ladder: max(1, min(8, 16 // spp)))")
+    ap.add_argument("--seeds", type=int, default=None,
+                    help="renders per sampler whose relMSE is averaged, the first --repeats of "
+                         "them timed (default 2 x --repeats: what a JIT variant's cold and warm "
+                         "renders give; caustics' relMSE is heavy-tailed, three seeds measure it "
+                         "to about +-20%%)")
     ap.add_argument("--variants", default=None,
                     help="Mitsuba variants, comma-separated (default llvm_ad_rgb; --ladder: "
                          "llvm_ad_rgb,scalar_rgb)")
@@ -626,6 +644,7 @@ def main(argv=None):
     if a.variants is None:
         a.variants = "llvm_ad_rgb"
     a.repeats = a.repeats or 3
+    a.seeds = a.seeds or 2 * a.repeats
     return efficiency_main(a)
 
 
