@@ -170,29 +170,51 @@ impl Scene {
         out.hit = 0;
         // Hits on mesh triangles, spheres and disks are gathered and their interactions
         // computed together (`shape::MeshHits`, `SphereHits`, `DiskHits`); hits on instances,
-        // and the lanes those hand back, one by one.
-        let mut meshes = MeshHits::new();
-        let mut spheres = SphereHits::new();
-        let mut disks = DiskHits::new();
+        // and the lanes those hand back, one by one. The lanes are sorted by kind first, so
+        // that only the gatherings of kinds hit are made (zeroing all three, kilobytes, for
+        // every packet was 1.5-3% of the render time of scenes of triangles only).
+        let (mut mesh_lanes, mut sphere_lanes, mut disk_lanes) = (0u32, 0u32, 0u32);
+        let mut owners = [[0u32; 2]; PACKET_LANES];
         let mut one_by_one = 0u32;
         let mut todo = hits.hit;
         while todo != 0 {
             let lane = todo.trailing_zeros() as usize;
             todo &= todo - 1;
-            let prim = hits.prim[lane] as usize;
-            let [shape, face] = self.accel.owner(prim);
-            match &self.shapes[shape as usize].kind {
-                ShapeKind::Mesh(mesh) if MeshHits::takes(mesh) => {
-                    meshes.push(lane, mesh, shape, face, prim as u32);
-                }
-                kind @ ShapeKind::Sphere { .. } => spheres.push(lane, shape, kind),
-                kind @ ShapeKind::Disk { .. } => disks.push(lane, shape, kind),
-                _ => one_by_one |= 1 << lane,
-            }
+            owners[lane] = self.accel.owner(hits.prim[lane] as usize);
+            let lanes = match &self.shapes[owners[lane][0] as usize].kind {
+                ShapeKind::Mesh(mesh) if MeshHits::takes(mesh) => &mut mesh_lanes,
+                ShapeKind::Sphere { .. } => &mut sphere_lanes,
+                ShapeKind::Disk { .. } => &mut disk_lanes,
+                _ => &mut one_by_one,
+            };
+            *lanes |= 1 << lane;
         }
-        one_by_one |= meshes.interactions(&self.accel, &hits, rays, out);
-        one_by_one |= spheres.interactions(&hits, rays, out);
-        one_by_one |= disks.interactions(&hits, rays, out);
+        let kind_of = |lane: usize| &self.shapes[owners[lane][0] as usize].kind;
+        if mesh_lanes != 0 {
+            let mut meshes = MeshHits::new();
+            for lane in lights::lanes_of(mesh_lanes) {
+                let ShapeKind::Mesh(mesh) = kind_of(lane) else {
+                    unreachable!("a lane of a mesh")
+                };
+                let [shape, face] = owners[lane];
+                meshes.push(lane, mesh, shape, face, hits.prim[lane]);
+            }
+            one_by_one |= meshes.interactions(&self.accel, &hits, rays, out);
+        }
+        if sphere_lanes != 0 {
+            let mut spheres = SphereHits::new();
+            for lane in lights::lanes_of(sphere_lanes) {
+                spheres.push(lane, owners[lane][0], kind_of(lane));
+            }
+            one_by_one |= spheres.interactions(&hits, rays, out);
+        }
+        if disk_lanes != 0 {
+            let mut disks = DiskHits::new();
+            for lane in lights::lanes_of(disk_lanes) {
+                disks.push(lane, owners[lane][0], kind_of(lane));
+            }
+            one_by_one |= disks.interactions(&hits, rays, out);
+        }
         while one_by_one != 0 {
             let lane = one_by_one.trailing_zeros() as usize;
             one_by_one &= one_by_one - 1;
