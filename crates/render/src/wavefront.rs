@@ -117,6 +117,14 @@ impl<'a, S: Sampler> Paths<'a, S> {
         self.live |= lanes;
     }
 
+    /// One more ray traced by each lane of `lanes` (over all sixteen lanes: one vector add).
+    #[inline(always)]
+    fn count_rays(&mut self, lanes: u32) {
+        for k in 0..LANES {
+            self.rays[k] += (lanes >> k) & 1;
+        }
+    }
+
     /// Lane `k`'s path as one [`PathState`].
     #[inline(always)]
     fn get(&self, k: usize) -> PathState {
@@ -231,8 +239,17 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
     // Made once: each step sets the active lanes only (stale rays in inactive lanes are
     // ignored), not the whole packet.
     let (mut rays, mut shadow_rays) = (RayPacket::new(), RayPacket::new());
-    // Which materials the lanes run (by BSDF index).
+    // Looked up per lane at every step, so made once: which materials the lanes run and
+    // at which next-event estimation samples a light (by BSDF index); each shape's BSDF and
+    // whether it emits (by shape index).
     let lane_models: Vec<bool> = scene.bsdfs.iter().map(Bsdf::has_r).collect();
+    let estimating: Vec<bool> = scene
+        .bsdfs
+        .iter()
+        .map(|b| integrator.estimates(b))
+        .collect();
+    let shape_bsdf: Vec<u32> = scene.shapes.iter().map(|s| s.bsdf).collect();
+    let shape_emits: Vec<bool> = scene.shapes.iter().map(|s| s.emitter.is_some()).collect();
     let environment_map = scene.environment_map();
     // The environment and the probability of choosing it (from any point).
     let environment_choice = scene
@@ -299,9 +316,7 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         rays.t_max = paths.ray_t_max.to_array();
         rays.active = live;
         stats.rays += u64::from(live.count_ones());
-        for k in lanes_of(live) {
-            paths.rays[k] += 1;
-        }
+        paths.count_rays(live);
         scene.intersect_packet_lanes(&rays, &mut its);
 
         // ---- Which lanes step one path at a time ----
@@ -313,12 +328,14 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         } else {
             0
         };
-        let mut scalar = 0u32;
+        let (mut scalar, mut emitting) = (0u32, 0u32);
         for k in lanes_of(live & its.hit) {
-            let shape = &scene.shapes[its.shape[k] as usize];
-            bsdf_of[k] = shape.bsdf;
-            let through = hidden & (1 << k) != 0 && shape.emitter.is_some();
-            if through || !lane_models[shape.bsdf as usize] {
+            let shape = its.shape[k] as usize;
+            let bsdf = shape_bsdf[shape];
+            bsdf_of[k] = bsdf;
+            emitting |= u32::from(shape_emits[shape]) << k;
+            let through = hidden & emitting & (1 << k) != 0;
+            if through || !lane_models[bsdf as usize] {
                 scalar |= 1 << k;
             }
         }
@@ -335,7 +352,7 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
 
         // ---- Emission of the surfaces hit ----
         let hit = vector & its.hit;
-        for k in lanes_of(hit) {
+        for k in lanes_of(hit & emitting) {
             let Some(emitter) = scene.shapes[its.shape[k] as usize].emitter else {
                 continue;
             };
@@ -351,14 +368,13 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
                 paths.result.set_lane(k, result);
             }
         }
-        let mut going = 0u32;
-        for k in lanes_of(hit) {
-            if paths.depth[k] + 1 >= integrator.max_depth {
-                ends |= 1 << k;
-            } else {
-                going |= 1 << k;
-            }
+        // (Over all sixteen lanes, which the compiler turns into one vector comparison.)
+        let mut last = 0u32;
+        for k in 0..LANES {
+            last |= u32::from(paths.depth[k] + 1 >= integrator.max_depth) << k;
         }
+        ends |= hit & last;
+        let going = hit & !last;
 
         // ---- The sample values of the bounces, all lanes at once where the sampler can ----
         let values = bounce_values(&paths, going);
@@ -387,13 +403,11 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         let mut u = Vector2::new(f32x16::ZERO, f32x16::ZERO);
         let choice_uses_sample = scene.lights.choice_uses_sample();
         for k in lanes_of(going) {
-            if !integrator.estimates(&scene.bsdfs[bsdf_of[k] as usize]) {
-                continue;
-            }
-            asks |= 1 << k;
-            if values.is_some() {
-                continue;
-            }
+            asks |= u32::from(estimating[bsdf_of[k] as usize]) << k;
+        }
+        // Without the sampler's lane values, each lane's from its stream.
+        let one_by_one = if values.is_some() { 0 } else { asks };
+        for k in lanes_of(one_by_one) {
             // `PathIntegrator::light_values`.
             let stream = &mut paths.stream[k];
             stream.seek(layout::bounce(paths.depth[k]) + layout::LIGHT_POSITION);
@@ -424,9 +438,7 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
                 &mut shadows,
             );
             stats.rays += u64::from(shadows.lanes.count_ones());
-            for k in lanes_of(shadows.lanes) {
-                paths.rays[k] += 1;
-            }
+            paths.count_rays(shadows.lanes);
         }
 
         // ---- BSDF sampling, sixteen at once ----
