@@ -33,6 +33,8 @@ use radia_math::{luminance, Spectrum};
 
 use super::UvTransform;
 
+mod lanes;
+
 /// How values between texel centres are reconstructed (Mitsuba's `filter_type`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum FilterType {

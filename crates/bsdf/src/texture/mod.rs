@@ -18,6 +18,7 @@
 
 use crate::{ShadingPoint, ShadingPointR};
 use glam::Vec2;
+use radia_math::lanes::{f32x16, WIDTH};
 use radia_math::real::{Real, Vector2, Vector3};
 use radia_math::Spectrum;
 use std::sync::Arc;
@@ -61,11 +62,22 @@ impl Texture {
     }
 
     /// [`Texture::eval`] over any [`Real`]: a constant is the same in every lane, an image
-    /// or checkerboard is looked up lane by lane.
+    /// is looked up in all sixteen lanes at once ([`Bitmap::eval_lanes`]), a checkerboard
+    /// lane by lane.
     #[inline(always)]
     pub fn eval_r<R: Real>(&self, sp: &ShadingPointR<R>) -> Vector3<R> {
         match self {
             Texture::Constant(c) => Vector3::splat(*c),
+            Texture::Bitmap(b) if R::LANES == WIDTH => {
+                let [u, v] = uv_lanes(sp);
+                let c = b.eval_lanes(u, v);
+                let back = |x: f32x16| R::from_fn(|k| x.as_array()[k]);
+                Vector3 {
+                    x: back(c.x),
+                    y: back(c.y),
+                    z: back(c.z),
+                }
+            }
             _ => lanes_3(|k| self.eval(&sp.lane(k))),
         }
     }
@@ -88,6 +100,11 @@ impl Texture {
     pub fn eval_1_r<R: Real>(&self, sp: &ShadingPointR<R>) -> R {
         match self {
             Texture::Constant(c) => R::splat(constant_1(*c)),
+            Texture::Bitmap(b) if R::LANES == WIDTH => {
+                let [u, v] = uv_lanes(sp);
+                let x = b.eval_1_lanes(u, v);
+                R::from_fn(|k| x.as_array()[k])
+            }
             _ => R::from_fn(|k| self.eval_1(&sp.lane(k))),
         }
     }
@@ -160,6 +177,13 @@ impl Texture {
             _ => None,
         }
     }
+}
+
+/// The uv of the sixteen lanes of `sp` (`R::LANES` must be 16), as the lane type of the
+/// image lookups.
+#[inline(always)]
+fn uv_lanes<R: Real>(sp: &ShadingPointR<R>) -> [f32x16; 2] {
+    [sp.uv.x, sp.uv.y].map(|c| f32x16::new(std::array::from_fn(|k| c.lane(k))))
 }
 
 /// `Vector3::from_fn(f)`, for one path without its array of sixteen lanes, which was not
