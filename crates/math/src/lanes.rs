@@ -8,7 +8,7 @@
 //! the `wide` crate's comparisons give them.
 
 pub use crate::real::Vector3;
-pub use wide::f32x16;
+pub use wide::{f32x16, i32x16};
 
 /// Lanes per operation.
 pub const WIDTH: usize = 16;

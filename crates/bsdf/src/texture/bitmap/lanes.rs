@@ -12,9 +12,8 @@
 
 use super::{Bitmap, FilterType, WrapMode};
 use glam::Vec2;
-use radia_math::lanes::{f32x16, gather, WIDTH};
+use radia_math::lanes::{f32x16, gather, i32x16, WIDTH};
 use radia_math::real::Vector3;
-use wide::i32x16;
 
 /// Texel coordinates up to this magnitude, and images up to this size, are wrapped in
 /// floats: every integer involved (coordinates, quotients times sizes) is below 2²⁴ and exact.
