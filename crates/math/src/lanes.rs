@@ -148,6 +148,19 @@ pub fn gather(base: &[f32], idx: &[u32; WIDTH]) -> f32x16 {
     }
 }
 
+/// The lanes whose bits are set in `bits` (bit k: lane k), lowest first: the loops over the
+/// lanes a step leaves to one-lane code.
+#[inline(always)]
+pub fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (bits != 0).then(|| {
+            let k = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            k
+        })
+    })
+}
+
 /// A mask with the lanes whose bits are set in `bits` (bit k: lane k).
 #[inline(always)]
 pub fn mask(bits: u32) -> f32x16 {

@@ -22,7 +22,7 @@ use crate::integrator::{CameraSamples, Traced};
 use crate::path::{layout, PathIntegrator, PathState, PathStats, PendingShadow, PrevVertex};
 use glam::{UVec2, Vec2, Vec3};
 use radia_bsdf::{Bsdf, ShadingPointR};
-use radia_math::lanes::{f32x16, Vec3s};
+use radia_math::lanes::{f32x16, lanes_of, Vec3s};
 use radia_math::real::{Mask, Real, Vector2, Vector3};
 use radia_math::{Ray, Spectrum};
 use radia_sampling::mis::power_heuristic_r;
@@ -205,18 +205,6 @@ impl Shadows {
         self.w.set_lane(k, shadow.w);
         self.pdf.set_lane(k, shadow.pdf);
     }
-}
-
-/// The lanes whose bits are set in `bits`, lowest first.
-#[inline(always)]
-fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
-    std::iter::from_fn(move || {
-        (bits != 0).then(|| {
-            let k = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            k
-        })
-    })
 }
 
 /// A lane mask from bits.

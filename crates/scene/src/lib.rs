@@ -25,6 +25,7 @@ pub use shape::{Shape, SurfaceInteraction, SurfaceLanes};
 
 use glam::Vec3;
 use radia_bsdf::{Bsdf, ShadingPoint};
+use radia_math::lanes::lanes_of;
 use radia_math::Ray;
 
 /// Mitsuba's relative ray epsilon (`include/mitsuba/core/constants.h`: 1500 · 2⁻²⁴). Ray
@@ -192,7 +193,7 @@ impl Scene {
         let kind_of = |lane: usize| &self.shapes[owners[lane][0] as usize].kind;
         if mesh_lanes != 0 {
             let mut meshes = MeshHits::new();
-            for lane in lights::lanes_of(mesh_lanes) {
+            for lane in lanes_of(mesh_lanes) {
                 let ShapeKind::Mesh(mesh) = kind_of(lane) else {
                     unreachable!("a lane of a mesh")
                 };
@@ -203,14 +204,14 @@ impl Scene {
         }
         if sphere_lanes != 0 {
             let mut spheres = SphereHits::new();
-            for lane in lights::lanes_of(sphere_lanes) {
+            for lane in lanes_of(sphere_lanes) {
                 spheres.push(lane, owners[lane][0], kind_of(lane));
             }
             one_by_one |= spheres.interactions(&hits, rays, out);
         }
         if disk_lanes != 0 {
             let mut disks = DiskHits::new();
-            for lane in lights::lanes_of(disk_lanes) {
+            for lane in lanes_of(disk_lanes) {
                 disks.push(lane, owners[lane][0], kind_of(lane));
             }
             one_by_one |= disks.interactions(&hits, rays, out);

@@ -30,24 +30,13 @@ use crate::shape::{
 use crate::Scene;
 use glam::{Vec2, Vec3};
 use radia_bsdf::Texture;
+pub(crate) use radia_math::lanes::lanes_of;
 use radia_math::lanes::{f32x16, mask, Vec3s};
 use radia_math::real::{Real, Vector2};
 use radia_sampling::{warp, DiscreteDistribution};
 
 /// Queries of [`Scene::sample_emitter_directions`].
 pub const LIGHT_LANES: usize = 16;
-
-/// The indices of the set bits of `bits`, lowest first.
-#[inline(always)]
-pub(crate) fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
-    std::iter::from_fn(move || {
-        (bits != 0).then(|| {
-            let k = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            k
-        })
-    })
-}
 
 /// How next-event estimation chooses a light.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -20,7 +20,7 @@ use crate::shape::SurfaceInteraction;
 use crate::{PacketHits, RayPacket, PACKET_LANES};
 use glam::Vec3;
 use radia_math::float::gamma;
-use radia_math::lanes::{self, f32x16, mask, Mat3s, Vec3s, WIDTH};
+use radia_math::lanes::{self, f32x16, lanes_of, mask, Mat3s, Vec3s, WIDTH};
 use radia_math::real::{FrameR, Vector2};
 use radia_math::{INV_TWO_PI, PI};
 
@@ -518,18 +518,6 @@ impl Surface {
         }
         scalar
     }
-}
-
-/// The lanes whose bits are set in `bits`, lowest first.
-#[inline(always)]
-fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
-    std::iter::from_fn(move || {
-        (bits != 0).then(|| {
-            let k = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            k
-        })
-    })
 }
 
 /// The surface interactions of a packet's closest hits, by component over the lanes: what

@@ -12,7 +12,7 @@
 
 use super::{Bitmap, FilterType, WrapMode};
 use glam::Vec2;
-use radia_math::lanes::{f32x16, gather, i32x16, WIDTH};
+use radia_math::lanes::{f32x16, gather, i32x16, lanes_of, WIDTH};
 use radia_math::real::Vector3;
 
 /// Texel coordinates up to this magnitude, and images up to this size, are wrapped in
@@ -193,18 +193,6 @@ impl Bitmap {
         }
         f32x16::new(out)
     }
-}
-
-/// The lanes whose bits are set in `bits`, lowest first.
-#[inline(always)]
-fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
-    std::iter::from_fn(move || {
-        (bits != 0).then(|| {
-            let k = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            k
-        })
-    })
 }
 
 #[cfg(test)]
