@@ -177,10 +177,7 @@ impl Scene {
         let (mut mesh_lanes, mut sphere_lanes, mut disk_lanes) = (0u32, 0u32, 0u32);
         let mut owners = [[0u32; 2]; PACKET_LANES];
         let mut one_by_one = 0u32;
-        let mut todo = hits.hit;
-        while todo != 0 {
-            let lane = todo.trailing_zeros() as usize;
-            todo &= todo - 1;
+        for lane in lanes_of(hits.hit) {
             owners[lane] = self.accel.owner(hits.prim[lane] as usize);
             let lanes = match &self.shapes[owners[lane][0] as usize].kind {
                 ShapeKind::Mesh(mesh) if MeshHits::takes(mesh) => &mut mesh_lanes,
@@ -216,9 +213,7 @@ impl Scene {
             }
             one_by_one |= disks.interactions(&hits, rays, out);
         }
-        while one_by_one != 0 {
-            let lane = one_by_one.trailing_zeros() as usize;
-            one_by_one &= one_by_one - 1;
+        for lane in lanes_of(one_by_one) {
             let hit = hits.hit(lane).expect("a lane with a hit");
             let si = self.interaction(&hit, &rays.ray(lane));
             out.set(lane, Some(&si));

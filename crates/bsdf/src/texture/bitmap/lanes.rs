@@ -132,7 +132,7 @@ impl Bitmap {
     /// Channel `c` of the texels of `index`.
     #[inline(always)]
     fn channel(&self, index: &[u32; WIDTH], c: usize) -> f32x16 {
-        if c == 0 || self.channels == 1 {
+        if c == 0 {
             gather(&self.data, index)
         } else {
             let shifted = index.map(|i| i + c as u32);
