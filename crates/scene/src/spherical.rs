@@ -3,8 +3,10 @@
 //! form of pbrt-v4's `SampleSphericalTriangle`, `src/pbrt/util/sampling.cpp`).
 //!
 //! Both run in f64: the sampler's trigonometry cancels badly in f32 for the small triangles of
-//! distant lights, and the two must agree on the solid angle (the sampling density is its
-//! reciprocal).
+//! distant lights, and for slivers seen from near their narrow end even where they subtend a
+//! quarter of a steradian or more, as the renderer samples them (`lights/tests.rs`,
+//! `chi2_spherical_triangles_thin_and_wide`); and the two must agree on the solid angle (the
+//! sampling density is its reciprocal).
 
 use glam::{DVec3, Vec2, Vec3};
 

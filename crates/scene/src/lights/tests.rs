@@ -15,6 +15,7 @@
 use crate::description::*;
 use crate::emitter::Emitter;
 use crate::lights::{LightContext, LightSamplerKind};
+use crate::shape::{MAX_SPHERICAL_SAMPLE_AREA, MIN_SPHERICAL_SAMPLE_AREA};
 use crate::spherical::triangle_solid_angle;
 use crate::Scene;
 use glam::{Affine3A, Vec2, Vec3};
@@ -306,12 +307,51 @@ fn chi2_triangle_near_far_grazing() {
     let near = Vec3::new(0.3, -0.1, 0.4);
     let far = Vec3::new(-20.0, 30.0, 60.0);
     let grazing = Vec3::new(1.5, 0.4, 0.02);
-    // Near and grazing sample the spherical triangle, far falls back to area sampling.
-    assert!(triangle_solid_angle(&tris[0], near) > 3e-4);
-    assert!(triangle_solid_angle(&tris[0], far) < 3e-4);
-    assert!(triangle_solid_angle(&tris[0], grazing) > 3e-4);
+    // Near samples the spherical triangle (1.6 sr); far and grazing, where it subtends
+    // less than `MIN_SPHERICAL_SAMPLE_AREA`, by area.
+    let omega = |p: Vec3| triangle_solid_angle(&tris[0], p);
+    assert!(omega(near) >= MIN_SPHERICAL_SAMPLE_AREA);
+    assert!(omega(far) < MIN_SPHERICAL_SAMPLE_AREA);
+    assert!(omega(grazing) < MIN_SPHERICAL_SAMPLE_AREA);
     for (p, n) in [(near, -Vec3::Z), (far, Vec3::ZERO), (grazing, Vec3::X)] {
         check_mesh_from(&s, &tris, p, n, "triangle");
+    }
+}
+
+/// The spherical-triangle sampler where single precision is tested hardest: a sliver (a
+/// corner angle of about a degree) seen from just above its middle and from near its narrow
+/// end, and a large triangle seen from so close that it fills most of the hemisphere
+/// (4.3 and 5.9 sr, below pbrt-v4's 6.22 sr limit). Every point is one the renderer samples
+/// by solid angle. (In single precision, as pbrt-v4 writes it, the sliver seen from near its
+/// narrow end fails: there cos b′ is within 10⁻⁷ of 1, √(1 − cos² b′) keeps few digits, and
+/// the barycentrics near the edge are off by 10⁻⁴, a tenth of their size.)
+#[test]
+fn chi2_spherical_triangles_thin_and_wide() {
+    let cases = [
+        (
+            [(-2.0, 0.0), (2.0, 0.0), (0.0, 0.05)],
+            [Vec3::new(0.0, 0.02, 0.03), Vec3::new(1.5, 0.01, 0.02)],
+        ),
+        (
+            [(-10.0, -10.0), (10.0, -10.0), (0.0, 10.0)],
+            [Vec3::new(0.0, -2.0, 0.5), Vec3::new(3.0, -9.0, 1.0)],
+        ),
+    ];
+    for (corners, points) in cases {
+        let g = mesh(
+            corners.map(|(x, y)| Vec3::new(x, y, 0.0)).to_vec(),
+            vec![[0, 1, 2]],
+        );
+        let tris = triangles(&g);
+        let s = scene(vec![emitting(g, Vec3::ONE)], vec![], LightSamplerKind::Bvh);
+        for p in points {
+            let omega = triangle_solid_angle(&tris[0], p);
+            assert!(
+                (MIN_SPHERICAL_SAMPLE_AREA..=MAX_SPHERICAL_SAMPLE_AREA).contains(&omega),
+                "{omega} sr from {p}"
+            );
+            check_mesh_from(&s, &tris, p, Vec3::ZERO, "spherical triangle");
+        }
     }
 }
 
