@@ -709,7 +709,8 @@ impl Instance {
 }
 
 /// Upper bound of the solid angle (sr) below which triangles are sampled by area. Sampling
-/// the spherical triangle costs about twice as much per sample (f64 trigonometry) and only
+/// the spherical triangle costs more per sample (f64 trigonometry; measured when it still
+/// called libm one lane at a time, about twice as much) and only
 /// pays off where the 1/r² and cosine factors vary strongly over the triangle, i.e. where it
 /// subtends a large solid angle; for small ones area sampling is already nearly proportional
 /// to solid angle. Measured on the Cornell box (light 0.06 sr from the floor): solid-angle

@@ -7,68 +7,185 @@
 //! quarter of a steradian or more, as the renderer samples them (`lights/tests.rs`,
 //! `chi2_spherical_triangles_thin_and_wide`); and the two must agree on the solid angle (the
 //! sampling density is its reciprocal).
+//!
+//! They are written once, over eight shading points at a time (`wide::f64x8`, whose arcsine,
+//! arctangent and sine/cosine are polynomials, Agner Fog's, instead of the C library's calls):
+//! the light samples of a packet's lanes (`shape/light_lanes.rs`) take them eight at a time,
+//! and one point ([`triangle_solid_angle`], [`sample_spherical_triangle`]) takes lane 0 of the
+//! same computation, so a lane holds bit for bit what the one-point code gives.
 
-use glam::{DVec3, Vec2, Vec3};
+use glam::{Vec2, Vec3};
+use wide::f64x8;
+
+/// Eight 3-vectors in f64, one per lane.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Vec3x8 {
+    x: f64x8,
+    y: f64x8,
+    z: f64x8,
+}
+
+impl Vec3x8 {
+    /// Lane k is (x[k], y[k], z[k]), widened exactly.
+    #[inline(always)]
+    pub(crate) fn from_f32(x: [f32; 8], y: [f32; 8], z: [f32; 8]) -> Self {
+        let wide = |v: [f32; 8]| f64x8::new(v.map(f64::from));
+        Self {
+            x: wide(x),
+            y: wide(y),
+            z: wide(z),
+        }
+    }
+
+    #[inline(always)]
+    fn splat(v: Vec3) -> Self {
+        let s = |c: f32| f64x8::splat(f64::from(c));
+        Self {
+            x: s(v.x),
+            y: s(v.y),
+            z: s(v.z),
+        }
+    }
+
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Self {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
+    }
+
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Self {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
+    }
+
+    #[inline(always)]
+    fn scale(self, s: f64x8) -> Self {
+        Self {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+
+    #[inline(always)]
+    fn neg(self) -> Self {
+        self.scale(f64x8::splat(-1.0))
+    }
+
+    #[inline(always)]
+    fn dot(self, o: Self) -> f64x8 {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+
+    #[inline(always)]
+    fn cross(self, o: Self) -> Self {
+        Self {
+            x: self.y * o.z - o.y * self.z,
+            y: self.z * o.x - o.z * self.x,
+            z: self.x * o.y - o.x * self.y,
+        }
+    }
+
+    #[inline(always)]
+    fn length_squared(self) -> f64x8 {
+        self.dot(self)
+    }
+
+    #[inline(always)]
+    fn length(self) -> f64x8 {
+        self.length_squared().sqrt()
+    }
+
+    #[inline(always)]
+    fn normalize(self) -> Self {
+        self.scale(f64x8::ONE / self.length())
+    }
+
+    /// All lanes whose three coordinates are finite.
+    #[inline(always)]
+    fn is_finite(self) -> f64x8 {
+        self.x.is_finite() & self.y.is_finite() & self.z.is_finite()
+    }
+}
+
+/// Unit vectors from `p` to the corners of `v`, and the lanes where `p` is none of them.
+#[inline(always)]
+fn corner_directions(v: &[Vec3x8; 3], p: Vec3x8) -> ([Vec3x8; 3], f64x8) {
+    let d = v.map(|c| c.sub(p));
+    let zero = f64x8::ZERO;
+    let apart = d[0].length_squared().simd_gt(zero)
+        & d[1].length_squared().simd_gt(zero)
+        & d[2].length_squared().simd_gt(zero);
+    (d.map(Vec3x8::normalize), apart)
+}
 
 /// Area of the spherical triangle with unit-vector corners a, b, c (Van Oosterom and
 /// Strackee 1983): |2 atan2(a · (b × c), 1 + a·b + a·c + b·c)|.
-#[inline]
-fn spherical_triangle_area(a: DVec3, b: DVec3, c: DVec3) -> f64 {
-    (2.0 * a
-        .dot(b.cross(c))
-        .atan2(1.0 + a.dot(b) + a.dot(c) + b.dot(c)))
-    .abs()
+#[inline(always)]
+fn spherical_triangle_area(a: Vec3x8, b: Vec3x8, c: Vec3x8) -> f64x8 {
+    let den = f64x8::ONE + a.dot(b) + a.dot(c) + b.dot(c);
+    (f64x8::splat(2.0) * a.dot(b.cross(c)).atan2(den)).abs()
 }
 
-/// Unit vectors from `p` to the corners of `v`, or `None` if `p` is a corner.
-#[inline]
-fn corner_directions(v: &[Vec3; 3], p: Vec3) -> Option<[DVec3; 3]> {
-    let p = p.as_dvec3();
-    let d = v.map(|c| c.as_dvec3() - p);
-    d.iter()
-        .all(|x| x.length_squared() > 0.0)
-        .then(|| d.map(DVec3::normalize))
+/// Solid angles (sr) that the triangles `v` subtend from the points `p`, lane by lane; 0
+/// where `p` is a corner.
+#[inline(always)]
+pub(crate) fn triangle_solid_angles(v: &[Vec3x8; 3], p: Vec3x8) -> f64x8 {
+    let ([a, b, c], apart) = corner_directions(v, p);
+    apart.select(spherical_triangle_area(a, b, c), f64x8::ZERO)
 }
 
 /// Solid angle (sr) that triangle `v` subtends from `p`; 0 when `p` is a corner.
 pub fn triangle_solid_angle(v: &[Vec3; 3], p: Vec3) -> f32 {
-    corner_directions(v, p).map_or(0.0, |[a, b, c]| spherical_triangle_area(a, b, c) as f32)
+    let omega = triangle_solid_angles(&v.map(Vec3x8::splat), Vec3x8::splat(p));
+    omega.to_array()[0] as f32
 }
 
-/// The angle between two unit vectors, accurate near 0 and π (pbrt-v4's `AngleBetween`).
-#[inline]
-fn angle_between(a: DVec3, b: DVec3) -> f64 {
-    if a.dot(b) < 0.0 {
-        std::f64::consts::PI - 2.0 * ((a + b).length() / 2.0).min(1.0).asin()
-    } else {
-        2.0 * ((b - a).length() / 2.0).min(1.0).asin()
-    }
+/// The angles between the unit vectors `a` and `b`, accurate near 0 and π (pbrt-v4's
+/// `AngleBetween`).
+#[inline(always)]
+fn angle_between(a: Vec3x8, b: Vec3x8) -> f64x8 {
+    let obtuse = a.dot(b).simd_lt(f64x8::ZERO);
+    let chord = obtuse.select(a.add(b).length(), b.sub(a).length());
+    let half = f64x8::splat(2.0) * (chord / f64x8::splat(2.0)).min(f64x8::ONE).asin();
+    obtuse.select(f64x8::PI - half, half)
 }
 
 /// `v` minus its component along the unit vector `w`.
-#[inline]
-fn gram_schmidt(v: DVec3, w: DVec3) -> DVec3 {
-    v - w * v.dot(w)
+#[inline(always)]
+fn gram_schmidt(v: Vec3x8, w: Vec3x8) -> Vec3x8 {
+    v.sub(w.scale(v.dot(w)))
 }
 
-/// A direction uniformly distributed in the solid angle triangle `v` subtends from `p`,
-/// returned as the barycentric coordinates (b0, b1, b2) of the point of the triangle it
-/// reaches. The density is 1 / [`triangle_solid_angle`]. `None` for degenerate
-/// configurations (`p` in the triangle's plane or at a corner).
-pub fn sample_spherical_triangle(v: &[Vec3; 3], p: Vec3, u: Vec2) -> Option<[f32; 3]> {
-    let [a, b, c] = corner_directions(v, p)?;
+/// Per lane, a direction uniformly distributed in the solid angle triangle `v` subtends from
+/// `p` (values `u0`, `u1`), returned as the barycentric coordinates (b1, b2) of the point of
+/// the triangle it reaches, and the lanes where there is one (bit k: lane k): not those with
+/// `p` in the triangle's plane or at a corner. The density is 1 / [`triangle_solid_angles`].
+#[inline(always)]
+pub(crate) fn sample_spherical_triangles(
+    v: &[Vec3x8; 3],
+    p: Vec3x8,
+    u0: f64x8,
+    u1: f64x8,
+) -> ([f64x8; 2], u32) {
+    let (zero, one, pi) = (f64x8::ZERO, f64x8::ONE, f64x8::PI);
+    let ([a, b, c], apart) = corner_directions(v, p);
     let (n_ab, n_bc, n_ca) = (a.cross(b), b.cross(c), c.cross(a));
-    if n_ab.length_squared() == 0.0 || n_bc.length_squared() == 0.0 || n_ca.length_squared() == 0.0
-    {
-        return None;
-    }
+    let arcs = n_ab.length_squared().simd_gt(zero)
+        & n_bc.length_squared().simd_gt(zero)
+        & n_ca.length_squared().simd_gt(zero);
     let (n_ab, n_bc, n_ca) = (n_ab.normalize(), n_bc.normalize(), n_ca.normalize());
     // Angles at the vertices; the area is α + β + γ − π.
-    let alpha = angle_between(n_ab, -n_ca);
-    let beta = angle_between(n_bc, -n_ab);
-    let gamma = angle_between(n_ca, -n_bc);
-    let pi = std::f64::consts::PI;
-    let (u0, u1) = (u.x as f64, u.y as f64);
+    let alpha = angle_between(n_ab, n_ca.neg());
+    let beta = angle_between(n_bc, n_ab.neg());
+    let gamma = angle_between(n_ca, n_bc.neg());
 
     // Choose the sub-triangle area A' = u0 · A and find the point c' on the arc a–c that
     // bounds it.
@@ -79,35 +196,54 @@ pub fn sample_spherical_triangle(v: &[Vec3; 3], p: Vec3, u: Vec2) -> Option<[f32
     let cos_phi = cos_ap * cos_alpha + sin_ap * sin_alpha;
     let k1 = cos_phi + cos_alpha;
     let k2 = sin_phi - sin_alpha * a.dot(b);
-    let cos_bp = ((k2 + (k2 * cos_phi - k1 * sin_phi) * cos_alpha)
-        / ((k2 * sin_phi + k1 * cos_phi) * sin_alpha))
-        .clamp(-1.0, 1.0);
-    let sin_bp = (1.0 - cos_bp * cos_bp).max(0.0).sqrt();
-    let cp = a * cos_bp + gram_schmidt(c, a).normalize() * sin_bp;
+    let cos_bp = (k2 + (k2 * cos_phi - k1 * sin_phi) * cos_alpha)
+        / ((k2 * sin_phi + k1 * cos_phi) * sin_alpha);
+    let defined = !cos_bp.is_nan();
+    let cos_bp = cos_bp.max(-one).min(one);
+    let sin_bp = (one - cos_bp * cos_bp).max(zero).sqrt();
+    let cp = a
+        .scale(cos_bp)
+        .add(gram_schmidt(c, a).normalize().scale(sin_bp));
 
     // Then a direction on the arc b–c' with cos θ uniform.
-    let cos_theta = 1.0 - u1 * (1.0 - cp.dot(b));
-    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-    let w = b * cos_theta + gram_schmidt(cp, b).normalize() * sin_theta;
-    if !w.is_finite() {
-        return None;
-    }
+    let cos_theta = one - u1 * (one - cp.dot(b));
+    let sin_theta = (one - cos_theta * cos_theta).max(zero).sqrt();
+    let w = b
+        .scale(cos_theta)
+        .add(gram_schmidt(cp, b).normalize().scale(sin_theta));
 
     // Barycentrics of the point of the triangle along w (Möller–Trumbore), clamped onto it.
-    let v0 = v[0].as_dvec3();
-    let (e1, e2) = (v[1].as_dvec3() - v0, v[2].as_dvec3() - v0);
+    let (e1, e2) = (v[1].sub(v[0]), v[2].sub(v[0]));
     let s1 = w.cross(e2);
     let divisor = s1.dot(e1);
-    if divisor == 0.0 {
-        return None;
-    }
-    let s = p.as_dvec3() - v0;
-    let mut b1 = (s.dot(s1) / divisor).clamp(0.0, 1.0);
-    let mut b2 = (w.dot(s.cross(e1)) / divisor).clamp(0.0, 1.0);
-    if b1 + b2 > 1.0 {
-        let sum = b1 + b2;
-        b1 /= sum;
-        b2 /= sum;
-    }
-    Some([(1.0 - b1 - b2) as f32, b1 as f32, b2 as f32])
+    let s = p.sub(v[0]);
+    let b1 = (s.dot(s1) / divisor).max(zero).min(one);
+    let b2 = (w.dot(s.cross(e1)) / divisor).max(zero).min(one);
+    let sum = b1 + b2;
+    let over = sum.simd_gt(one);
+    let (b1, b2) = (over.select(b1 / sum, b1), over.select(b2 / sum, b2));
+    let valid = apart & arcs & defined & w.is_finite() & !divisor.simd_eq(zero);
+    ([b1, b2], valid.to_bitmask())
+}
+
+/// A direction uniformly distributed in the solid angle triangle `v` subtends from `p`,
+/// returned as the barycentric coordinates (b0, b1, b2) of the point of the triangle it
+/// reaches. The density is 1 / [`triangle_solid_angle`]. `None` for degenerate
+/// configurations (`p` in the triangle's plane or at a corner).
+pub fn sample_spherical_triangle(v: &[Vec3; 3], p: Vec3, u: Vec2) -> Option<[f32; 3]> {
+    let value = |x: f32| f64x8::splat(f64::from(x));
+    let ([b1, b2], valid) = sample_spherical_triangles(
+        &v.map(Vec3x8::splat),
+        Vec3x8::splat(p),
+        value(u.x),
+        value(u.y),
+    );
+    let (b1, b2) = (b1.to_array()[0], b2.to_array()[0]);
+    (valid & 1 != 0).then(|| barycentrics(b1, b2))
+}
+
+/// (b0, b1, b2) in f32 from b1, b2 in f64.
+#[inline(always)]
+pub(crate) fn barycentrics(b1: f64, b2: f64) -> [f32; 3] {
+    [(1.0 - b1 - b2) as f32, b1 as f32, b2 as f32]
 }

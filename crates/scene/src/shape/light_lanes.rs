@@ -1,4 +1,4 @@
-//! Light samples on mesh triangles, sixteen at once: the area-sampling branch of
+//! Light samples on mesh triangles, sixteen at once: the triangle branch of
 //! [`Shape::sample_direction`](super::Shape::sample_direction), which next-event estimation
 //! takes on every emitting triangle that is small seen from the shading point (the common
 //! case: a ceiling light seen from the room).
@@ -7,18 +7,22 @@
 //! strategy, the warp to the triangle, the conversion to solid angle), which a core runs one
 //! lane after another. Here the same formulas run over sixteen lanes
 //! ([`radia_math::lanes`], whose operations are the scalar ones in the same order), so every
-//! lane holds bit for bit what the scalar code gives. Lanes whose triangle is to be sampled
-//! by solid angle are left to the scalar code ([`LaneSamples::done`] says which were
-//! done here). Spheres seen from outside (sampled in the cone they subtend) are done the
-//! same way ([`LightSpheres`]).
+//! lane holds bit for bit what the scalar code gives. Triangles near enough to be sampled by
+//! solid angle are sampled here too, eight lanes at a time in double precision by the
+//! scalar code's own functions (`spherical.rs`), except on meshes with vertex normals, which
+//! are left to the scalar code ([`LaneSamples::done`] says which were done here). Spheres
+//! seen from outside (sampled in the cone they subtend) are done the same way
+//! ([`LightSpheres`]).
 
 use super::lanes::triangle_point;
 use super::{LightTriangle, MAX_SPHERICAL_SAMPLE_AREA, MIN_SPHERICAL_SAMPLE_AREA};
+use crate::spherical::{self, Vec3x8};
 use glam::Vec3;
 use radia_math::float::gamma;
 use radia_math::lanes::{self, f32x16, gather, Vec3s, WIDTH};
 use radia_math::real::Vector2;
 use radia_math::INV_TWO_PI;
+use wide::f64x8;
 
 type Rows = [[f32; WIDTH]; 3];
 
@@ -111,6 +115,22 @@ fn set(rows: &mut Rows, k: usize, v: Vec3) {
     (rows[0][k], rows[1][k], rows[2][k]) = (v.x, v.y, v.z);
 }
 
+/// The halves (0: lanes 0–7, 1: lanes 8–15) holding any of the lanes `bits`.
+#[inline(always)]
+fn halves(bits: u32) -> impl Iterator<Item = usize> {
+    (0..2).filter(move |h| bits >> (8 * h) & 0xff != 0)
+}
+
+/// Half `half` of the lanes of `v`, widened to f64.
+#[inline(always)]
+fn half_x8(v: Vec3s, half: usize) -> Vec3x8 {
+    let part = |x: f32x16| -> [f32; 8] {
+        let a = x.to_array();
+        std::array::from_fn(|i| a[8 * half + i])
+    };
+    Vec3x8::from_f32(part(v.x), part(v.y), part(v.z))
+}
+
 impl LightTriangles {
     pub(crate) fn new() -> Self {
         Self {
@@ -146,10 +166,9 @@ impl LightTriangles {
         let index = &self.index;
         let n = table.vector(4, index);
 
-        // ---- Which lanes are area-sampled (`spherical_sampling` returns `None`) ----
-        // Only the far branch can say so without the exact solid angle; a lane nearer than
-        // twice the circumradius, or whose estimate reaches the bound, goes to the scalar
-        // code, which computes the exact angle (its result may still be area sampling).
+        // ---- `spherical_sampling`: by area, or by solid angle ----
+        // The far branch says "by area" without the exact solid angle; the other lanes
+        // compute it (eight at a time, as the scalar code does: `spherical.rs`).
         let to_c = table.vector(5, index) - ref_p;
         let d2 = to_c.length_squared();
         let r2 = gather(&table.fields[19], index);
@@ -157,21 +176,70 @@ impl LightTriangles {
         let estimate =
             f32x16::splat(0.5) * table.vector(3, index).dot(to_c).abs() / (d2 * d2.sqrt());
         let small = estimate.simd_ge(f32x16::splat(MIN_SPHERICAL_SAMPLE_AREA));
-        let done = self.lanes & (far & !small).to_bitmask();
+        let by_area_far = self.lanes & (far & !small).to_bitmask();
+        let exact = self.lanes & !by_area_far;
+        let v0 = table.vector(0, index);
+        let v = [v0, table.vector(1, index), table.vector(2, index)];
+        let mut omega = [0.0f32; WIDTH];
+        for half in halves(exact) {
+            let corners = v.map(|c| half_x8(c, half));
+            let o = spherical::triangle_solid_angles(&corners, half_x8(ref_p, half));
+            omega[8 * half..8 * half + 8].copy_from_slice(&o.to_array().map(|o| o as f32));
+        }
+        let omega = f32x16::new(omega);
+        let (min, max) = (
+            f32x16::splat(MIN_SPHERICAL_SAMPLE_AREA),
+            f32x16::splat(MAX_SPHERICAL_SAMPLE_AREA),
+        );
+        let below_max = omega.simd_le(max);
+        let spherical = far.select(omega.simd_gt(f32x16::ZERO), omega.simd_ge(min)) & below_max;
+        let spherical = exact & spherical.to_bitmask();
+        let side = gather(&table.fields[SIDE], index);
+        let flat = side.simd_eq(f32x16::ZERO).to_bitmask();
+        // Solid-angle samples on meshes with vertex normals are left to the scalar code
+        // (`smooth_solid_angle`).
+        let by_solid_angle = spherical & flat;
+        let done = self.lanes & !(spherical & !flat);
 
-        // ---- `sample_position`: uniform on the triangle ----
+        // ---- `sample_position`: uniform on the triangle; or `sample_spherical_triangle` ----
         let (u0, u1) = (u.x, u.y);
         let t = (f32x16::ONE - u0).max(f32x16::ZERO).sqrt();
-        let (b1, b2) = (f32x16::ONE - t, t * u1);
-        let v0 = table.vector(0, index);
-        let e1 = table.vector(1, index) - v0;
-        let e2 = table.vector(2, index) - v0;
+        let (mut b1, mut b2) = (f32x16::ONE - t, t * u1);
+        let mut sampled = !0u32;
+        if by_solid_angle != 0 {
+            let (mut s1, mut s2) = (b1.to_array(), b2.to_array());
+            for half in halves(by_solid_angle) {
+                let corners = v.map(|c| half_x8(c, half));
+                let u = |x: f32x16| {
+                    f64x8::new(std::array::from_fn(|i| {
+                        f64::from(x.to_array()[8 * half + i])
+                    }))
+                };
+                let ([c1, c2], valid) = spherical::sample_spherical_triangles(
+                    &corners,
+                    half_x8(ref_p, half),
+                    u(u0),
+                    u(u1),
+                );
+                let (c1, c2) = (c1.to_array(), c2.to_array());
+                for i in 0..8 {
+                    let k = 8 * half + i;
+                    if by_solid_angle & (1 << k) != 0 {
+                        let [_, b1, b2] = spherical::barycentrics(c1[i], c2[i]);
+                        (s1[k], s2[k]) = (b1, b2);
+                    }
+                }
+                sampled &= !((!valid & 0xff) << (8 * half));
+            }
+            (b1, b2) = (f32x16::new(s1), f32x16::new(s2));
+        }
+        let e1 = v[1] - v0;
+        let e2 = v[2] - v0;
         let (p, p_error) = triangle_point(v0, e1, e2, b1, b2);
         let pdf_area = f32x16::ONE / gather(&table.fields[18], index);
 
         // ---- `emitted_normal`: the normal the light glows about ----
-        let side = gather(&table.fields[SIDE], index);
-        let smooth = done & !side.simd_eq(f32x16::ZERO).to_bitmask();
+        let smooth = done & !by_solid_angle & !flat;
         let sh_n = if smooth == 0 {
             n
         } else {
@@ -195,9 +263,14 @@ impl LightTriangles {
         let cos = sh_n.dot(d);
         let pdf = pdf_area * dist2 / cos.abs();
         let finite = pdf.is_finite() & pdf.simd_gt(f32x16::ZERO);
+        // By solid angle, the density is the solid angle's reciprocal, and a sample is one
+        // whose direction is finite.
+        let solid = lanes::mask(by_solid_angle);
+        let pdf = solid.select(f32x16::ONE / omega, pdf);
+        let finite = solid.select(d.is_finite(), finite);
         // The area light's own test: no light seen from behind.
         let front = !cos.simd_ge(f32x16::ZERO);
-        let valid = done & (finite & front).to_bitmask();
+        let valid = done & sampled & (finite & front).to_bitmask();
 
         LaneSamples {
             done,
