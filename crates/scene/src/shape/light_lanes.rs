@@ -196,10 +196,7 @@ impl LightTriangles {
         let spherical = exact & spherical.to_bitmask();
         let side = gather(&table.fields[SIDE], index);
         let flat = side.simd_eq(f32x16::ZERO).to_bitmask();
-        // Solid-angle samples on meshes with vertex normals are left to the scalar code
-        // (`smooth_solid_angle`).
-        let by_solid_angle = spherical & flat;
-        let done = self.lanes & !(spherical & !flat);
+        let (by_solid_angle, done) = (spherical, self.lanes);
 
         // ---- `sample_position`: uniform on the triangle; or `sample_spherical_triangle` ----
         let (u0, u1) = (u.x, u.y);
@@ -239,7 +236,7 @@ impl LightTriangles {
         let pdf_area = f32x16::ONE / gather(&table.fields[18], index);
 
         // ---- `emitted_normal`: the normal the light glows about ----
-        let smooth = done & !by_solid_angle & !flat;
+        let smooth = done & !flat;
         let sh_n = if smooth == 0 {
             n
         } else {
@@ -264,10 +261,17 @@ impl LightTriangles {
         let pdf = pdf_area * dist2 / cos.abs();
         let finite = pdf.is_finite() & pdf.simd_gt(f32x16::ZERO);
         // By solid angle, the density is the solid angle's reciprocal, and a sample is one
-        // whose direction is finite.
+        // whose direction is finite; on a smooth mesh the density is put in Mitsuba's
+        // convention (`smooth_solid_angle`: the cosine about the emitted normal instead of the
+        // facet's), and must be finite and positive.
         let solid = lanes::mask(by_solid_angle);
-        let pdf = solid.select(f32x16::ONE / omega, pdf);
-        let finite = solid.select(d.is_finite(), finite);
+        let pdf_solid = f32x16::ONE / omega;
+        let smooth_solid = lanes::mask(by_solid_angle & smooth);
+        let pdf_solid = smooth_solid.select(pdf_solid * n.dot(d).abs() / cos.abs(), pdf_solid);
+        let finite_solid = d.is_finite() & !smooth_solid
+            | (pdf_solid.is_finite() & pdf_solid.simd_gt(f32x16::ZERO) & d.is_finite());
+        let pdf = solid.select(pdf_solid, pdf);
+        let finite = solid.select(finite_solid, finite);
         // The area light's own test: no light seen from behind.
         let front = !cos.simd_ge(f32x16::ZERO);
         let valid = done & sampled & (finite & front).to_bitmask();
