@@ -1435,9 +1435,9 @@ fn sampling_weight_multiplies_a_bvh_leafs_odds() {
 // ---------------------------------------------------------------------------------------
 // Light samples in lanes
 
-/// `Scene::sample_emitter_directions` (sixteen queries at once, flat triangles sampled in
-/// lanes) gives, bit for bit, what `sample_emitter_direction` gives each query: from points
-/// near a light triangle (solid-angle sampling, left to the scalar code), far from it (area
+/// `Scene::sample_emitter_directions` (sixteen queries at once, triangles sampled in lanes)
+/// gives, bit for bit, what `sample_emitter_direction` gives each query: from points near a
+/// light triangle, flat or smooth (solid-angle sampling in f64 lanes), far from it (area
 /// sampling in lanes), behind it (no sample), from outside spheres (cone sampling in lanes)
 /// and inside them (the scalar code), among lights of other kinds (disk: the scalar code;
 /// a constant environment or an environment map: in lanes), and with lanes left out of the

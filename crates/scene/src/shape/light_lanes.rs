@@ -9,10 +9,9 @@
 //! ([`radia_math::lanes`], whose operations are the scalar ones in the same order), so every
 //! lane holds bit for bit what the scalar code gives. Triangles near enough to be sampled by
 //! solid angle are sampled here too, eight lanes at a time in double precision by the
-//! scalar code's own functions (`spherical.rs`), except on meshes with vertex normals, which
-//! are left to the scalar code ([`LaneSamples::done`] says which were done here). Spheres
-//! seen from outside (sampled in the cone they subtend) are done the same way
-//! ([`LightSpheres`]).
+//! scalar code's own functions (`spherical.rs`). Spheres seen from outside (sampled in the
+//! cone they subtend) are done the same way ([`LightSpheres`]); those seen from inside are
+//! left to the scalar code ([`LaneSamples::done`] says which were done here).
 
 use super::lanes::triangle_point;
 use super::{LightTriangle, MAX_SPHERICAL_SAMPLE_AREA, MIN_SPHERICAL_SAMPLE_AREA};
@@ -95,8 +94,8 @@ pub(crate) struct LightTriangles {
 /// What [`LightTriangles::sample`] or [`LightSpheres::sample`] found: per lane, the fields of
 /// the `DirectionSample` the scalar code returns.
 pub(crate) struct LaneSamples {
-    /// Lanes sampled here (the others are left to the scalar code: triangles to be sampled
-    /// by solid angle, spheres seen from inside).
+    /// Lanes sampled here (the others are left to the scalar code: spheres seen from
+    /// inside).
     pub done: u32,
     /// Of those, the lanes whose sample is valid (finite, positive density, seen from the
     /// front of the triangle: otherwise the scalar code returns no sample).
@@ -226,7 +225,8 @@ impl LightTriangles {
                         (s1[k], s2[k]) = (b1, b2);
                     }
                 }
-                sampled &= !((!valid & 0xff) << (8 * half));
+                // (Only the lanes sampled so: the half's others computed meaningless values.)
+                sampled &= !(((!valid & 0xff) << (8 * half)) & by_solid_angle);
             }
             (b1, b2) = (f32x16::new(s1), f32x16::new(s2));
         }
