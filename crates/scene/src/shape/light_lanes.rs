@@ -120,14 +120,17 @@ fn halves(bits: u32) -> impl Iterator<Item = usize> {
     (0..2).filter(move |h| bits >> (8 * h) & 0xff != 0)
 }
 
+/// Half `half` of the lanes of `x`.
+#[inline(always)]
+fn half_of(x: f32x16, half: usize) -> [f32; 8] {
+    let a = x.to_array();
+    std::array::from_fn(|i| a[8 * half + i])
+}
+
 /// Half `half` of the lanes of `v`, widened to f64.
 #[inline(always)]
 fn half_x8(v: Vec3s, half: usize) -> Vec3x8 {
-    let part = |x: f32x16| -> [f32; 8] {
-        let a = x.to_array();
-        std::array::from_fn(|i| a[8 * half + i])
-    };
-    Vec3x8::from_f32(part(v.x), part(v.y), part(v.z))
+    Vec3x8::from_f32(half_of(v.x, half), half_of(v.y, half), half_of(v.z, half))
 }
 
 impl LightTriangles {
@@ -179,11 +182,14 @@ impl LightTriangles {
         let exact = self.lanes & !by_area_far;
         let v0 = table.vector(0, index);
         let v = [v0, table.vector(1, index), table.vector(2, index)];
+        // Per half with such lanes, its triangles' corners and shading points in f64.
+        let mut wide_halves = [None; 2];
         let mut omega = [0.0f32; WIDTH];
         for half in halves(exact) {
-            let corners = v.map(|c| half_x8(c, half));
-            let o = spherical::triangle_solid_angles(&corners, half_x8(ref_p, half));
+            let (corners, ref_p) = (v.map(|c| half_x8(c, half)), half_x8(ref_p, half));
+            let o = spherical::triangle_solid_angles(&corners, ref_p);
             omega[8 * half..8 * half + 8].copy_from_slice(&o.to_array().map(|o| o as f32));
+            wide_halves[half] = Some((corners, ref_p));
         }
         let omega = f32x16::new(omega);
         let (min, max) = (
@@ -192,10 +198,9 @@ impl LightTriangles {
         );
         let below_max = omega.simd_le(max);
         let spherical = far.select(omega.simd_gt(f32x16::ZERO), omega.simd_ge(min)) & below_max;
-        let spherical = exact & spherical.to_bitmask();
+        let by_solid_angle = exact & spherical.to_bitmask();
         let side = gather(&table.fields[SIDE], index);
         let flat = side.simd_eq(f32x16::ZERO).to_bitmask();
-        let (by_solid_angle, done) = (spherical, self.lanes);
 
         // ---- `sample_position`: uniform on the triangle; or `sample_spherical_triangle` ----
         let (u0, u1) = (u.x, u.y);
@@ -205,18 +210,10 @@ impl LightTriangles {
         if by_solid_angle != 0 {
             let (mut s1, mut s2) = (b1.to_array(), b2.to_array());
             for half in halves(by_solid_angle) {
-                let corners = v.map(|c| half_x8(c, half));
-                let u = |x: f32x16| {
-                    f64x8::new(std::array::from_fn(|i| {
-                        f64::from(x.to_array()[8 * half + i])
-                    }))
-                };
-                let ([c1, c2], valid) = spherical::sample_spherical_triangles(
-                    &corners,
-                    half_x8(ref_p, half),
-                    u(u0),
-                    u(u1),
-                );
+                let (corners, ref_p) = wide_halves[half].expect("a half with exact lanes");
+                let value = |x: f32x16| f64x8::new(half_of(x, half).map(f64::from));
+                let ([c1, c2], valid) =
+                    spherical::sample_spherical_triangles(&corners, ref_p, value(u0), value(u1));
                 let (c1, c2) = (c1.to_array(), c2.to_array());
                 for i in 0..8 {
                     let k = 8 * half + i;
@@ -236,7 +233,7 @@ impl LightTriangles {
         let pdf_area = f32x16::ONE / gather(&table.fields[18], index);
 
         // ---- `emitted_normal`: the normal the light glows about ----
-        let smooth = done & !flat;
+        let smooth = self.lanes & !flat;
         let sh_n = if smooth == 0 {
             n
         } else {
@@ -274,10 +271,10 @@ impl LightTriangles {
         let finite = solid.select(finite_solid, finite);
         // The area light's own test: no light seen from behind.
         let front = !cos.simd_ge(f32x16::ZERO);
-        let valid = done & sampled & (finite & front).to_bitmask();
+        let valid = self.lanes & sampled & (finite & front).to_bitmask();
 
         LaneSamples {
-            done,
+            done: self.lanes,
             valid,
             p,
             p_error,
