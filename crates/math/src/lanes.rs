@@ -148,6 +148,21 @@ pub fn gather(base: &[f32], idx: &[u32; WIDTH]) -> f32x16 {
     }
 }
 
+/// `base[idx[k]]` in each lane k, as [`gather`] (its instruction moves the bits as they
+/// are): table indices and other integers.
+#[inline(always)]
+pub fn gather_u32(base: &[u32], idx: &[u32; WIDTH]) -> [u32; WIDTH] {
+    // SAFETY: u32 and f32 have the same size and alignment and every bit pattern is an f32;
+    // the gather and the array copy move the bits unchanged (no arithmetic on them).
+    let floats = unsafe { std::slice::from_raw_parts(base.as_ptr() as *const f32, base.len()) };
+    let values = gather(floats, idx).to_array();
+    let mut out = [0; WIDTH];
+    for k in 0..WIDTH {
+        out[k] = values[k].to_bits();
+    }
+    out
+}
+
 /// The lanes whose bits are set in `bits` (bit k: lane k), lowest first: the loops over the
 /// lanes a step leaves to one-lane code.
 #[inline(always)]
@@ -338,6 +353,26 @@ mod tests {
         let mut idx = [0u32; WIDTH];
         idx[9] = 8;
         gather(&base, &idx);
+    }
+
+    #[test]
+    fn gather_u32_moves_every_bit_pattern() {
+        // Small integers are subnormal as floats, others NaNs (signalling ones too).
+        let base = [
+            0u32,
+            1,
+            7,
+            0x7f80_0001,
+            0xffc0_0000,
+            0x7fff_ffff,
+            u32::MAX,
+            1 << 23,
+        ];
+        let idx: [u32; WIDTH] = std::array::from_fn(|k| (k as u32 * 5) % 8);
+        let got = gather_u32(&base, &idx);
+        for k in 0..WIDTH {
+            assert_eq!(got[k], base[idx[k] as usize], "lane {k}");
+        }
     }
 
     #[test]

@@ -1,3 +1,5 @@
+use radia_math::lanes;
+
 /// A discrete distribution over indices 0..n proportional to non-negative weights, sampled
 /// in O(1) with Walker's alias method (Vose's construction).
 #[derive(Clone, Debug)]
@@ -108,11 +110,192 @@ impl DiscreteDistribution {
     }
 }
 
+/// Alias tables of `n` buckets each, laid one after another in flat arrays, drawn from
+/// sixteen lanes at once, each lane from its own table: the rows of a 2D distribution
+/// (`radia_scene`'s environment map: a row of cells, then a column in that row).
+///
+/// [`AliasLanes::sample`] gives lane by lane what [`DiscreteDistribution::sample`] gives for
+/// the same table and value, bit for bit (the same f64 arithmetic), without its branch on
+/// the coin flip (a guess a core gets wrong half the time in a bucket kept with probability
+/// ½) and with the tables read by gathers.
+#[derive(Clone, Debug)]
+pub struct AliasLanes {
+    /// Buckets per table.
+    n: usize,
+    /// Per bucket of every table: the probability of keeping the bucket's own index, and
+    /// the alias otherwise (an index within the table).
+    keep: Vec<f32>,
+    alias: Vec<u32>,
+}
+
+impl AliasLanes {
+    /// The tables in order, each of `n` buckets; `None` stands for a table that is never
+    /// drawn from (its buckets keep their own index; the caller masks such lanes).
+    ///
+    /// Panics if a table does not have `n` buckets or the tables hold 2³² buckets or more.
+    pub fn new<'a>(
+        n: usize,
+        tables: impl IntoIterator<Item = Option<&'a DiscreteDistribution>>,
+    ) -> Self {
+        let (mut keep, mut alias) = (Vec::new(), Vec::new());
+        for table in tables {
+            match table {
+                Some(t) => {
+                    assert_eq!(t.buckets.len(), n, "alias tables of unequal length");
+                    keep.extend(t.buckets.iter().map(|b| b.0));
+                    alias.extend(t.buckets.iter().map(|b| b.1));
+                }
+                None => {
+                    keep.extend(std::iter::repeat_n(1.0, n));
+                    alias.extend(0..n as u32);
+                }
+            }
+        }
+        assert!(
+            keep.len() <= u32::MAX as usize,
+            "alias tables too large for lanes"
+        );
+        Self { n, keep, alias }
+    }
+
+    /// For each lane k, [`DiscreteDistribution::sample`] of table `table[k]` at `u[k]`: the
+    /// index within the table and `u_remapped`. Every lane is drawn (a lane's value need not
+    /// be in [0, 1): NaN and negative values draw bucket 0 as the scalar code does, values of
+    /// 1 or more the last bucket). Panics if a table index is out of range.
+    #[inline(always)]
+    pub fn sample(
+        &self,
+        table: &[u32; lanes::WIDTH],
+        u: lanes::f32x16,
+    ) -> ([u32; lanes::WIDTH], lanes::f32x16) {
+        use wide::f64x8;
+        const ONE_MINUS_EPS: f64 = 1.0 - f64::EPSILON / 2.0;
+        let n = self.n as f64;
+        // f32::max(u, 0): 0 for a NaN u.
+        let u = u
+            .simd_gt(lanes::f32x16::ZERO)
+            .select(u, lanes::f32x16::ZERO);
+        let u = u.to_array();
+        let mut bucket = [0u32; lanes::WIDTH];
+        let mut frac = [0.0f64; lanes::WIDTH];
+        for half in 0..2 {
+            let at = 8 * half;
+            let mut wide_u = [0.0; 8];
+            for k in 0..8 {
+                wide_u[k] = u[at + k] as f64;
+            }
+            let scaled = f64x8::new(wide_u) * f64x8::splat(n);
+            // `scaled as usize`, then at most n − 1: scaled is not negative, so its floor.
+            let b = scaled.floor().min(f64x8::splat(n - 1.0));
+            let f = (scaled - b).min(f64x8::splat(ONE_MINUS_EPS));
+            let (b, f) = (b.to_array(), f.to_array());
+            for k in 0..8 {
+                bucket[at + k] = b[k] as u32;
+                frac[at + k] = f[k];
+            }
+        }
+        let mut at = [0u32; lanes::WIDTH];
+        for k in 0..lanes::WIDTH {
+            at[k] = table[k] * self.n as u32 + bucket[k];
+        }
+        let keep = lanes::gather(&self.keep, &at).to_array();
+        let alias = lanes::gather_u32(&self.alias, &at);
+        let mut index = [0u32; lanes::WIDTH];
+        let mut remapped = [0.0f32; lanes::WIDTH];
+        for half in 0..2 {
+            let at = 8 * half;
+            let (mut wide_keep, mut f) = ([0.0; 8], [0.0; 8]);
+            for k in 0..8 {
+                wide_keep[k] = keep[at + k] as f64;
+                f[k] = frac[at + k];
+            }
+            let (keep, f) = (f64x8::new(wide_keep), f64x8::new(f));
+            let kept = f.simd_lt(keep);
+            let one = f64x8::splat(1.0);
+            let r = kept.select(f / keep, (f - keep) / (one - keep)).to_array();
+            let kept = kept.to_bitmask();
+            for k in 0..8 {
+                index[at + k] = if kept & (1 << k) != 0 {
+                    bucket[at + k]
+                } else {
+                    alias[at + k]
+                };
+                remapped[at + k] = r[k] as f32;
+            }
+        }
+        // The f32 rounding of a value just below 1 can be 1.
+        let remapped = lanes::f32x16::new(remapped);
+        let below_one = lanes::f32x16::splat(1.0 - f32::EPSILON / 2.0);
+        (
+            index,
+            remapped.simd_lt(below_one).select(remapped, below_one),
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::chi2::{chi2_test_2d, chi2_test_discrete, Chi2Config2d};
     use glam::Vec2;
+
+    /// [`AliasLanes::sample`] is [`DiscreteDistribution::sample`] of each lane's table bit
+    /// for bit: tables with zero weights, one dominant weight, equal weights and a table
+    /// never drawn from; values at 0, next to 1, at 1 and beyond, negative and NaN.
+    #[test]
+    fn alias_lanes_are_the_scalar_samples() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg32::seed_from_u64(11);
+        for n in [1usize, 2, 7, 64, 1000] {
+            let tables: Vec<Option<DiscreteDistribution>> = (0..5)
+                .map(|t| match t {
+                    0 => DiscreteDistribution::new(&vec![1.0; n]),
+                    1 => None,
+                    2 => DiscreteDistribution::new(
+                        &(0..n)
+                            .map(|i| if i == n / 2 { 1e4 } else { 1.0 })
+                            .collect::<Vec<_>>(),
+                    ),
+                    _ => DiscreteDistribution::new(
+                        &(0..n)
+                            .map(|i| if i % 3 == 1 { 0.0 } else { rng.random::<f32>() })
+                            .collect::<Vec<_>>(),
+                    )
+                    .or_else(|| DiscreteDistribution::new(&vec![1.0; n])),
+                })
+                .collect();
+            let lanes = AliasLanes::new(n, tables.iter().map(Option::as_ref));
+            for _ in 0..500 {
+                let table: [u32; lanes::WIDTH] =
+                    std::array::from_fn(|_| rng.random_range(0..tables.len() as u32));
+                let u: [f32; lanes::WIDTH] =
+                    std::array::from_fn(|_| match rng.random_range(0..12) {
+                        0 => 0.0,
+                        1 => 1.0 - f32::EPSILON / 2.0,
+                        2 => 1.0,
+                        3 => 1.5,
+                        4 => -0.25,
+                        5 => f32::NAN,
+                        _ => rng.random(),
+                    });
+                let (index, remapped) = lanes.sample(&table, lanes::f32x16::new(u));
+                let remapped = remapped.to_array();
+                for k in 0..lanes::WIDTH {
+                    let Some(t) = &tables[table[k] as usize] else {
+                        continue;
+                    };
+                    let want = t.sample(u[k]);
+                    assert_eq!(
+                        (index[k] as usize, remapped[k].to_bits()),
+                        (want.index, want.u_remapped.to_bits()),
+                        "n {n}, table {}, u {}",
+                        table[k],
+                        u[k]
+                    );
+                }
+            }
+        }
+    }
 
     #[test]
     fn rejects_bad_weights() {

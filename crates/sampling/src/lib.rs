@@ -13,7 +13,7 @@ pub mod mis;
 mod sampler;
 pub mod warp;
 
-pub use discrete::DiscreteDistribution;
+pub use discrete::{AliasLanes, DiscreteDistribution};
 pub use sampler::{
     hash4, mix64, unit_f32, AnySampler, IndependentSampler, LowDiscrepancySampler,
     MultijitterSampler, OrthogonalSampler, PixelKey, SampleStream, Sampler, SamplerKind,

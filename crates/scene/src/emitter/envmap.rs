@@ -54,7 +54,7 @@
 use crate::description::RgbImage;
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 use radia_math::{luminance, safe_acos, safe_sqrt, Spectrum, INV_PI, INV_TWO_PI};
-use radia_sampling::{warp, DiscreteDistribution};
+use radia_sampling::{warp, AliasLanes, DiscreteDistribution};
 
 use super::EmitterSample;
 
@@ -80,6 +80,11 @@ pub struct Envmap {
     rows: Option<DiscreteDistribution>,
     /// Per row of cells: the column ∝ mean corner weight.
     columns: Vec<Option<DiscreteDistribution>>,
+    /// `rows` and `columns` for drawing in lanes (`lanes.rs`), and per row of cells whether
+    /// it has columns (1) or not (0).
+    row_lanes: Option<AliasLanes>,
+    column_lanes: AliasLanes,
+    has_columns: Vec<u32>,
     /// Sampling weight of every texel (H × W, row-major; see the module docs).
     weight: Vec<f32>,
     /// 1 / Σ_cells w̄ Ω: the density is the interpolated weight times it (0 for a black map).
@@ -160,9 +165,12 @@ impl Envmap {
             total += row_sum;
         }
         let rows = DiscreteDistribution::new(&row_weight);
-        let columns = (0..h - 1)
+        let columns: Vec<_> = (0..h - 1)
             .map(|j| DiscreteDistribution::new(&cell_mean[j * w..(j + 1) * w]))
             .collect();
+        let row_lanes = rows.as_ref().map(|r| AliasLanes::new(h - 1, [Some(r)]));
+        let column_lanes = AliasLanes::new(w, columns.iter().map(Option::as_ref));
+        let has_columns = columns.iter().map(|c| c.is_some() as u32).collect();
         let inv_total = if total > 0.0 {
             (1.0 / total) as f32
         } else {
@@ -179,6 +187,9 @@ impl Envmap {
             cell_pole_dist,
             rows,
             columns,
+            row_lanes,
+            column_lanes,
+            has_columns,
             weight,
             inv_total,
             radiance_integral: integral as f32,
@@ -242,20 +253,6 @@ impl Envmap {
         let top = t[j * w + i0] * (1.0 - fx) + t[j * w + i1] * fx;
         let bottom = t[(j + 1) * w + i0] * (1.0 - fx) + t[(j + 1) * w + i1] * fx;
         top * (1.0 - fy) + bottom * fy
-    }
-
-    /// The radiance of texels (i, j), (i + 1, j), (i, j + 1) and (i + 1, j + 1), columns
-    /// wrapped: what [`Envmap::lerp_texels`] interpolates (the lane code gathers them).
-    #[inline(always)]
-    fn cell_texels(&self, i: usize, j: usize) -> [Spectrum; 4] {
-        let (t, w) = (&self.texels, self.width);
-        let i1 = if i + 1 == w { 0 } else { i + 1 };
-        [
-            t[j * w + i],
-            t[j * w + i1],
-            t[(j + 1) * w + i],
-            t[(j + 1) * w + i1],
-        ]
     }
 
     /// Whether texel row j lies above the horizon (θⱼ < π/2; the cells from row j down

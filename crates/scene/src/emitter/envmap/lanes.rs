@@ -1,13 +1,16 @@
 //! [`Envmap::sample_direction`] for sixteen sample values at once, the light sample of the
-//! packet loop's next-event estimates in an environment-lit scene.
+//! packet loop's next-event estimates in an environment-lit scene, and
+//! [`Envmap::eval_pdf`] for the sixteen directions of a packet's escaped rays.
 //!
-//! One sample is two alias-table lookups (each a load that depends on the last and a
-//! division), the bilinear warp (two square roots, six divisions), a polar angle, a sine
-//! and cosine, a normalisation and an atan2, a chain a core runs one lane after another.
-//! Here the table lookups stay lane by lane (their loads cannot be shared) and everything
-//! after them runs over sixteen lanes ([`radia_math::lanes`], [`warp::lanes`]: the scalar
-//! operations in the same order), so every lane holds bit for bit what the scalar sample
-//! gives.
+//! One sample is two alias-table lookups (each a load that depends on the last, a division
+//! and a coin flip a core mispredicts half the time), the reads of a cell's four weights and
+//! texels, the bilinear warp (two square roots, six divisions), a polar angle, a sine and
+//! cosine, a normalisation and an atan2, a chain a core runs one lane after another. Here
+//! all of it runs over sixteen lanes: the tables drawn from by [`radia_sampling::AliasLanes`], the cell's
+//! values read by gathers ([`lanes::gather`]), the rest by [`radia_math::lanes`] and
+//! [`warp::lanes`] with the scalar operations in the same order, so every lane holds bit for
+//! bit what the scalar sample gives. A lookup finds its cell's row by a short search lane by
+//! lane, then reads the cell the same way.
 
 use super::Envmap;
 use crate::emitter::EmitterSampleLanes;
@@ -30,65 +33,54 @@ impl Envmap {
         out: &mut EmitterSampleLanes,
     ) {
         out.valid &= !active;
-        let Some(rows) = self.rows.as_ref() else {
+        let Some(rows) = self.row_lanes.as_ref() else {
             return;
         };
-        let u = [u.x.to_array(), u.y.to_array()];
-        // ---- The cell of each lane: row, then column (alias tables, lane by lane) ----
-        let mut sampled = 0u32;
-        // The remapped sample values in the cell (s, t), its corner weights, its column
-        // (i + ½) and its rows' pole distances.
-        let mut st = [[0.0; WIDTH]; 2];
-        let mut corners = [[0.0; WIDTH]; 4];
-        let mut column = [0.0; WIDTH];
-        let mut pole = [[0.0; WIDTH]; 2];
-        let mut upper = 0u32;
-        let mut row_index = [0.0; WIDTH];
-        // The radiance at the cell's corners, `texels[corner][channel][lane]`.
-        let mut texels = [[[0.0; WIDTH]; 3]; 4];
-        for k in lanes_of(active) {
-            let row = rows.sample(u[0][k]);
-            let Some(col) = self.columns[row.index]
-                .as_ref()
-                .map(|columns| columns.sample(u[1][k]))
-            else {
-                continue;
-            };
-            sampled |= 1 << k;
-            let (i, j) = (col.index, row.index);
-            (st[0][k], st[1][k]) = (col.u_remapped, row.u_remapped);
-            let c = self.corners(i, j);
-            for (corner, value) in corners.iter_mut().zip(c) {
-                corner[k] = value;
-            }
-            column[k] = i as f32 + 0.5;
-            row_index[k] = j as f32;
-            [pole[0][k], pole[1][k]] = self.cell_pole_dist[j];
-            if Self::upper(j, self.height) {
-                upper |= 1 << k;
-            }
-            for (texel, c) in texels.iter_mut().zip(self.cell_texels(i, j)) {
-                (texel[0][k], texel[1][k], texel[2][k]) = (c.x, c.y, c.z);
-            }
-        }
+        // ---- The cell of each lane: row, then column (alias tables in lanes) ----
+        let (j, t_u) = rows.sample(&[0; WIDTH], u.x);
+        let (i, s_u) = self.column_lanes.sample(&j, u.y);
+        let has_columns = lanes::gather_u32(&self.has_columns, &j);
+        let sampled = active & bits(|k| has_columns[k] != 0);
         if sampled == 0 {
             return;
         }
+        // Every lane's row and column are within the map (a row without columns draws from
+        // a table of its own indices), so every lane reads its cell; lanes not sampled are
+        // masked at the end.
+        let cell = self.cell_lanes(&i, &j);
+        let corners = cell.corners(&self.weight);
+        let texels = cell.texels(&self.texels);
+        let pole_dist: &[f32] = bytemuck::cast_slice(&self.cell_pole_dist);
+        // (Loops over the lanes rather than `array::map`, whose closures the compiler left
+        // as calls here.)
+        let (mut pole_at, mut column, mut row_index) =
+            ([[0; WIDTH]; 2], [0.0; WIDTH], [0.0; WIDTH]);
+        for k in 0..WIDTH {
+            pole_at[0][k] = 2 * j[k];
+            pole_at[1][k] = 2 * j[k] + 1;
+            column[k] = i[k] as f32 + 0.5;
+            row_index[k] = j[k] as f32;
+        }
+        let pole = [
+            lanes::gather(pole_dist, &pole_at[0]),
+            lanes::gather(pole_dist, &pole_at[1]),
+        ];
+        let upper = bits(|k| Self::upper(j[k] as usize, self.height));
+        let (column, row_index) = (f32x16::new(column), f32x16::new(row_index));
+        let st = [s_u, t_u];
 
         // ---- Everything after the tables, sixteen lanes at once ----
-        let v = |a: &[f32; WIDTH]| f32x16::new(*a);
         let one = f32x16::ONE;
-        let corners = corners.each_ref().map(v);
-        let [s, t] = warp::lanes::square_to_bilinear(st.each_ref().map(v), corners);
+        let [s, t] = warp::lanes::square_to_bilinear(st, corners);
         // Envmap::cell_cos_sin.
-        let (p0, p1) = (v(&pole[0]), v(&pole[1]));
+        let [p0, p1] = pole;
         let p = p0 + (p1 - p0) * t;
         let sin2 = p * (f32x16::splat(2.0) - p);
         // safe_sqrt: f32::max(x, 0) is 0 for a NaN x.
         let sin_theta = sin2.simd_gt(f32x16::ZERO).select(sin2, f32x16::ZERO).sqrt();
         let cos_theta = lanes::mask(upper).select(one - p, p - one);
         let (sin_phi, cos_phi) =
-            lanes::sin_cos_turns((v(&column) + s) / f32x16::splat(self.width as f32));
+            lanes::sin_cos_turns((column + s) / f32x16::splat(self.width as f32));
         let local = Vec3s {
             x: sin_phi * sin_theta,
             y: cos_theta,
@@ -100,7 +92,7 @@ impl Envmap {
         // Envmap::eval_cell.
         let (angle, computed) = lanes::atan2(sin_theta, cos_theta);
         let y = angle * f32x16::splat(INV_PI) * f32x16::splat((self.height - 1) as f32);
-        let radiance = lerp_texels(&texels, s, clamp(y - v(&row_index), 0.0, 1.0));
+        let radiance = lerp_texels(&texels, s, clamp(y - row_index, 0.0, 1.0));
         let computed = sampled & computed.to_bitmask();
 
         // `sample_direction` returns no sample where the density is NaN or not positive.
@@ -118,7 +110,8 @@ impl Envmap {
         out.radiance = Vec3s::select(m, Vec3s::from_rows(&radiance), out.radiance);
         for k in lanes_of(sampled & !computed) {
             // An angle the scalar atan2 leaves to the C library (a NaN direction).
-            let mut es = self.sample_direction(glam::Vec2::new(u[0][k], u[1][k]));
+            let mut es =
+                self.sample_direction(glam::Vec2::new(u.x.as_array()[k], u.y.as_array()[k]));
             if let Some(es) = &mut es {
                 es.pdf *= pmf.as_array()[k];
             }
@@ -152,39 +145,40 @@ impl Envmap {
         let computed = (azimuth_computed & polar_computed).to_bitmask();
         let (x0, y_rows, local_rows) = (x0.to_array(), y.to_array(), local.to_rows());
 
-        // ---- The texels and the sampling cell, lane by lane (loads and short searches) ----
-        let (w, h) = (self.width, self.height);
+        // ---- The texels' cell and the sampling cell, lane by lane (short searches) ----
+        let h = self.height;
         let has_density = self.rows.is_some();
-        let mut texels = [[[0.0; WIDTH]; 3]; 4];
-        let mut texel_row = [0.0; WIDTH];
-        let mut corners = [[0.0; WIDTH]; 4];
+        // The texel column, row and the sampling cell's row (0 in lanes left out, whose
+        // reads are then within the map and unused).
+        let mut i0 = [0u32; WIDTH];
+        let mut j0 = [0u32; WIDTH];
+        let mut j = [0u32; WIDTH];
         let mut t = [0.0; WIDTH];
         for k in lanes_of(active & computed) {
-            let i0 = super::wrap_column(x0[k], w);
+            i0[k] = super::wrap_column(x0[k], self.width) as u32;
             // Lookup::radiance's row.
-            let j0 = (y_rows[k].floor().max(0.0) as usize).min(h - 2);
-            texel_row[k] = j0 as f32;
-            for (texel, c) in texels.iter_mut().zip(self.cell_texels(i0, j0)) {
-                (texel[0][k], texel[1][k], texel[2][k]) = (c.x, c.y, c.z);
-            }
+            j0[k] = (y_rows[k].floor().max(0.0) as usize).min(h - 2) as u32;
             // Lookup::pdf's cell.
             if has_density {
                 let dk = Vec3::new(local_rows[0][k], local_rows[1][k], local_rows[2][k]);
-                let j = self.cell_row(dk.y, y_rows[k]);
-                t[k] = self.cell_t(j, dk);
-                for (corner, value) in corners.iter_mut().zip(self.corners(i0, j)) {
-                    corner[k] = value;
-                }
+                let row = self.cell_row(dk.y, y_rows[k]);
+                j[k] = row as u32;
+                t[k] = self.cell_t(row, dk);
             }
         }
 
-        // ---- The bilinear radiance and density, in lanes ----
-        let v = |a: &[f32; WIDTH]| f32x16::new(*a);
-        let radiance = lerp_texels(&texels, fx, clamp(y - v(&texel_row), 0.0, 1.0));
+        // ---- The four texels and weights (gathers), the bilinear radiance and density ----
+        let texels = self.cell_lanes(&i0, &j0).texels(&self.texels);
+        let mut texel_row = [0.0; WIDTH];
+        for k in 0..WIDTH {
+            texel_row[k] = j0[k] as f32;
+        }
+        let texel_row = f32x16::new(texel_row);
+        let radiance = lerp_texels(&texels, fx, clamp(y - texel_row, 0.0, 1.0));
         let pdf = if has_density {
-            let st = [clamp(fx, 0.0, 1.0), v(&t)];
-            (warp::lanes::bilerp(st, corners.each_ref().map(v)) * f32x16::splat(self.inv_total))
-                .to_array()
+            let corners = self.cell_lanes(&i0, &j).corners(&self.weight);
+            let st = [clamp(fx, 0.0, 1.0), f32x16::new(t)];
+            (warp::lanes::bilerp(st, corners) * f32x16::splat(self.inv_total)).to_array()
         } else {
             [0.0; WIDTH]
         };
@@ -210,16 +204,83 @@ fn clamp(a: f32x16, lo: f32, hi: f32) -> f32x16 {
     a.simd_gt(hi).select(hi, a)
 }
 
-/// [`Envmap::lerp_texels`] in lanes: the four texels `texels[corner][channel][lane]` in the
-/// order of [`Envmap::cell_texels`], at fractions `fx` across and `fy`
-/// down; the radiance by channel.
+/// [`Envmap::lerp_texels`] in lanes: the four texels `texels[corner][channel]` in the order
+/// of [`CellLanes`], at fractions `fx` across and `fy` down; the radiance by
+/// channel.
 #[inline(always)]
-fn lerp_texels(texels: &[[[f32; WIDTH]; 3]; 4], fx: f32x16, fy: f32x16) -> [[f32; WIDTH]; 3] {
+fn lerp_texels(texels: &[[f32x16; 3]; 4], fx: f32x16, fy: f32x16) -> [[f32; WIDTH]; 3] {
     let one = f32x16::ONE;
-    std::array::from_fn(|c| {
-        let at = |corner: usize| f32x16::new(texels[corner][c]);
-        let top = at(0) * (one - fx) + at(1) * fx;
-        let bottom = at(2) * (one - fx) + at(3) * fx;
-        (top * (one - fy) + bottom * fy).to_array()
-    })
+    let mut out = [[0.0; WIDTH]; 3];
+    for (c, out) in out.iter_mut().enumerate() {
+        let top = texels[0][c] * (one - fx) + texels[1][c] * fx;
+        let bottom = texels[2][c] * (one - fx) + texels[3][c] * fx;
+        *out = (top * (one - fy) + bottom * fy).to_array();
+    }
+    out
+}
+
+/// The bits k of the lanes for which `f(k)` holds.
+#[inline(always)]
+fn bits(f: impl Fn(usize) -> bool) -> u32 {
+    let mut bits = 0;
+    for k in 0..WIDTH {
+        bits |= (f(k) as u32) << k;
+    }
+    bits
+}
+
+/// Per lane, the flat indices of a cell's four texels (i, j), (i + 1, j), (i, j + 1),
+/// (i + 1, j + 1), columns wrapped: the order of [`Envmap::lerp_texels`] and
+/// [`Envmap::corners`].
+struct CellLanes {
+    at: [[u32; WIDTH]; 4],
+}
+
+impl CellLanes {
+    /// The corners' sampling weights.
+    #[inline(always)]
+    fn corners(&self, weight: &[f32]) -> [f32x16; 4] {
+        let at = &self.at;
+        [
+            lanes::gather(weight, &at[0]),
+            lanes::gather(weight, &at[1]),
+            lanes::gather(weight, &at[2]),
+            lanes::gather(weight, &at[3]),
+        ]
+    }
+
+    /// The corners' radiance, `[corner][channel]`.
+    #[inline(always)]
+    fn texels(&self, texels: &[Spectrum]) -> [[f32x16; 3]; 4] {
+        let flat: &[f32] = bytemuck::cast_slice(texels);
+        let mut out = [[f32x16::ZERO; 3]; 4];
+        for (out, at) in out.iter_mut().zip(&self.at) {
+            for (c, out) in out.iter_mut().enumerate() {
+                let mut channel = [0; WIDTH];
+                for k in 0..WIDTH {
+                    channel[k] = 3 * at[k] + c as u32;
+                }
+                *out = lanes::gather(flat, &channel);
+            }
+        }
+        out
+    }
+}
+
+impl Envmap {
+    /// The cells of columns `i` and rows `j` per lane (each within the map).
+    #[inline(always)]
+    fn cell_lanes(&self, i: &[u32; WIDTH], j: &[u32; WIDTH]) -> CellLanes {
+        let w = self.width as u32;
+        let mut at = [[0; WIDTH]; 4];
+        for k in 0..WIDTH {
+            let i1 = if i[k] + 1 == w { 0 } else { i[k] + 1 };
+            let (r0, r1) = (j[k] * w, j[k] * w + w);
+            at[0][k] = r0 + i[k];
+            at[1][k] = r0 + i1;
+            at[2][k] = r1 + i[k];
+            at[3][k] = r1 + i1;
+        }
+        CellLanes { at }
+    }
 }
