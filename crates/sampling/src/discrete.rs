@@ -87,21 +87,7 @@ impl DiscreteDistribution {
     /// its own index with probability 1, the NaN of 0 / 0) and the fraction loses further bits.
     #[inline]
     pub fn sample(&self, u: f32) -> DiscreteSample {
-        const ONE_MINUS_EPS: f64 = 1.0 - f64::EPSILON / 2.0;
-        let n = self.buckets.len();
-        let scaled = u.max(0.0) as f64 * n as f64;
-        let bucket = (scaled as usize).min(n - 1);
-        let frac = (scaled - bucket as f64).min(ONE_MINUS_EPS);
-        let (keep, alias) = self.buckets[bucket];
-        let keep = keep as f64;
-        let (index, u_remapped) = if frac < keep {
-            (bucket, frac / keep)
-        } else {
-            // keep < 1 here, since frac < 1.
-            (alias as usize, (frac - keep) / (1.0 - keep))
-        };
-        // The f32 rounding of a value just below 1 can be 1.
-        let u_remapped = (u_remapped as f32).min(1.0 - f32::EPSILON / 2.0);
+        let (index, u_remapped) = draw(self.buckets.len(), u, |b| self.buckets[b]);
         DiscreteSample {
             index,
             pmf: self.pmf[index],
@@ -110,14 +96,35 @@ impl DiscreteDistribution {
     }
 }
 
-/// Alias tables of `n` buckets each, laid one after another in flat arrays, drawn from
-/// sixteen lanes at once, each lane from its own table: the rows of a 2D distribution
-/// (`radia_scene`'s environment map: a row of cells, then a column in that row).
+/// [`DiscreteDistribution::sample`]'s index and remapped value from a table of `n` buckets
+/// whose bucket b is `bucket(b)` = (probability of keeping b, alias).
+#[inline(always)]
+fn draw(n: usize, u: f32, bucket: impl Fn(usize) -> (f32, u32)) -> (usize, f32) {
+    const ONE_MINUS_EPS: f64 = 1.0 - f64::EPSILON / 2.0;
+    let scaled = u.max(0.0) as f64 * n as f64;
+    let b = (scaled as usize).min(n - 1);
+    let frac = (scaled - b as f64).min(ONE_MINUS_EPS);
+    let (keep, alias) = bucket(b);
+    let keep = keep as f64;
+    let (index, u_remapped) = if frac < keep {
+        (b, frac / keep)
+    } else {
+        // keep < 1 here, since frac < 1.
+        (alias as usize, (frac - keep) / (1.0 - keep))
+    };
+    // The f32 rounding of a value just below 1 can be 1.
+    (index, (u_remapped as f32).min(1.0 - f32::EPSILON / 2.0))
+}
+
+/// Alias tables of `n` buckets each, laid one after another in flat arrays: the conditional
+/// distributions of a 2D one (`radia_scene`'s environment map: a row of cells, then a column
+/// in that row), drawn from one value at a time ([`AliasLanes::sample_one`]) or sixteen at
+/// once, each lane from its own table ([`AliasLanes::sample`]).
 ///
-/// [`AliasLanes::sample`] gives lane by lane what [`DiscreteDistribution::sample`] gives for
-/// the same table and value, bit for bit (the same f64 arithmetic), without its branch on
-/// the coin flip (a guess a core gets wrong half the time in a bucket kept with probability
-/// ½) and with the tables read by gathers.
+/// Both give what [`DiscreteDistribution::sample`] gives for the same table and value, bit
+/// for bit (the same f64 arithmetic); the lanes without its branch on the coin flip (a guess
+/// a core gets wrong half the time in a bucket kept with probability ½) and with the tables
+/// read by gathers.
 #[derive(Clone, Debug)]
 pub struct AliasLanes {
     /// Buckets per table.
@@ -133,13 +140,13 @@ impl AliasLanes {
     /// drawn from (its buckets keep their own index; the caller masks such lanes).
     ///
     /// Panics if a table does not have `n` buckets or the tables hold 2³² buckets or more.
-    pub fn new<'a>(
+    pub fn new<D: std::borrow::Borrow<DiscreteDistribution>>(
         n: usize,
-        tables: impl IntoIterator<Item = Option<&'a DiscreteDistribution>>,
+        tables: impl IntoIterator<Item = Option<D>>,
     ) -> Self {
         let (mut keep, mut alias) = (Vec::new(), Vec::new());
         for table in tables {
-            match table {
+            match table.as_ref().map(D::borrow) {
                 Some(t) => {
                     assert_eq!(t.buckets.len(), n, "alias tables of unequal length");
                     keep.extend(t.buckets.iter().map(|b| b.0));
@@ -156,6 +163,14 @@ impl AliasLanes {
             "alias tables too large for lanes"
         );
         Self { n, keep, alias }
+    }
+
+    /// [`DiscreteDistribution::sample`] of table `table` at `u`: the index within the table
+    /// and `u_remapped`.
+    #[inline]
+    pub fn sample_one(&self, table: usize, u: f32) -> (usize, f32) {
+        let start = table * self.n;
+        draw(self.n, u, |b| (self.keep[start + b], self.alias[start + b]))
     }
 
     /// For each lane k, [`DiscreteDistribution::sample`] of table `table[k]` at `u[k]`: the
@@ -239,8 +254,8 @@ mod tests {
     use crate::chi2::{chi2_test_2d, chi2_test_discrete, Chi2Config2d};
     use glam::Vec2;
 
-    /// [`AliasLanes::sample`] is [`DiscreteDistribution::sample`] of each lane's table bit
-    /// for bit: tables with zero weights, one dominant weight, equal weights and a table
+    /// [`AliasLanes::sample`] and [`AliasLanes::sample_one`] are
+    /// [`DiscreteDistribution::sample`] of each lane's table bit for bit: tables with zero weights, one dominant weight, equal weights and a table
     /// never drawn from; values at 0, next to 1, at 1 and beyond, negative and NaN.
     #[test]
     fn alias_lanes_are_the_scalar_samples() {
@@ -285,13 +300,17 @@ mod tests {
                         continue;
                     };
                     let want = t.sample(u[k]);
-                    assert_eq!(
-                        (index[k] as usize, remapped[k].to_bits()),
-                        (want.index, want.u_remapped.to_bits()),
-                        "n {n}, table {}, u {}",
-                        table[k],
-                        u[k]
-                    );
+                    let want = (want.index, want.u_remapped.to_bits());
+                    let (one, one_u) = lanes.sample_one(table[k] as usize, u[k]);
+                    for got in [(index[k] as usize, remapped[k]), (one, one_u)] {
+                        assert_eq!(
+                            (got.0, got.1.to_bits()),
+                            want,
+                            "n {n}, table {}, u {}",
+                            table[k],
+                            u[k]
+                        );
+                    }
                 }
             }
         }

@@ -78,12 +78,11 @@ pub struct Envmap {
     cell_pole_dist: Vec<[f32; 2]>,
     /// Row of cells ∝ its weight; `None` when the map is black (nothing to sample).
     rows: Option<DiscreteDistribution>,
-    /// Per row of cells: the column ∝ mean corner weight.
-    columns: Vec<Option<DiscreteDistribution>>,
-    /// `rows` and `columns` for drawing in lanes (`lanes.rs`), and per row of cells whether
-    /// it has columns (1) or not (0).
+    /// `rows` as a table for drawing in lanes (`lanes.rs`).
     row_lanes: Option<AliasLanes>,
-    column_lanes: AliasLanes,
+    /// Per row of cells j, table j: the column ∝ mean corner weight; and whether row j has
+    /// any weight to sample (1) or not (0: its table keeps every index and is never used).
+    columns: AliasLanes,
     has_columns: Vec<u32>,
     /// Sampling weight of every texel (H × W, row-major; see the module docs).
     weight: Vec<f32>,
@@ -165,12 +164,16 @@ impl Envmap {
             total += row_sum;
         }
         let rows = DiscreteDistribution::new(&row_weight);
-        let columns: Vec<_> = (0..h - 1)
-            .map(|j| DiscreteDistribution::new(&cell_mean[j * w..(j + 1) * w]))
-            .collect();
+        let mut has_columns = vec![0; h - 1];
+        let columns = AliasLanes::new(
+            w,
+            (0..h - 1).map(|j| {
+                let row = DiscreteDistribution::new(&cell_mean[j * w..(j + 1) * w]);
+                has_columns[j] = row.is_some() as u32;
+                row
+            }),
+        );
         let row_lanes = rows.as_ref().map(|r| AliasLanes::new(h - 1, [Some(r)]));
-        let column_lanes = AliasLanes::new(w, columns.iter().map(Option::as_ref));
-        let has_columns = columns.iter().map(|c| c.is_some() as u32).collect();
         let inv_total = if total > 0.0 {
             (1.0 / total) as f32
         } else {
@@ -186,9 +189,8 @@ impl Envmap {
             row_cos,
             cell_pole_dist,
             rows,
-            columns,
             row_lanes,
-            column_lanes,
+            columns,
             has_columns,
             weight,
             inv_total,
@@ -336,10 +338,13 @@ impl Envmap {
     #[inline]
     pub fn sample_direction(&self, u: Vec2) -> Option<EmitterSample> {
         let row = self.rows.as_ref()?.sample(u.x);
-        let col = self.columns[row.index].as_ref()?.sample(u.y);
-        let (i, j) = (col.index, row.index);
+        let j = row.index;
+        if self.has_columns[j] == 0 {
+            return None;
+        }
+        let (i, s) = self.columns.sample_one(j, u.y);
         let corners = self.corners(i, j);
-        let st = warp::square_to_bilinear(Vec2::new(col.u_remapped, row.u_remapped), corners);
+        let st = warp::square_to_bilinear(Vec2::new(s, row.u_remapped), corners);
         let (cos_theta, sin_theta) = self.cell_cos_sin(j, st.y);
         let (sin_phi, cos_phi) =
             radia_math::trig::sin_cos_turns((i as f32 + 0.5 + st.x) / self.width as f32);

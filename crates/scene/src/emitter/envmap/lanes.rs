@@ -6,11 +6,12 @@
 //! and a coin flip a core mispredicts half the time), the reads of a cell's four weights and
 //! texels, the bilinear warp (two square roots, six divisions), a polar angle, a sine and
 //! cosine, a normalisation and an atan2, a chain a core runs one lane after another. Here
-//! all of it runs over sixteen lanes: the tables drawn from by [`radia_sampling::AliasLanes`], the cell's
-//! values read by gathers ([`lanes::gather`]), the rest by [`radia_math::lanes`] and
-//! [`warp::lanes`] with the scalar operations in the same order, so every lane holds bit for
-//! bit what the scalar sample gives. A lookup finds its cell's row by a short search lane by
-//! lane, then reads the cell the same way.
+//! all of it runs over sixteen lanes: the tables drawn from by
+//! [`radia_sampling::AliasLanes`], the cell's values read by gathers ([`lanes::gather`]),
+//! the rest by [`radia_math::lanes`] and [`warp::lanes`] with the scalar operations in the
+//! same order, so every lane holds bit for bit what the scalar sample gives. A lookup finds
+//! its cell's row by a short search lane by lane (in lanes, each step a gather for every
+//! lane, it took longer), then reads the cell by gathers too.
 
 use super::Envmap;
 use crate::emitter::EmitterSampleLanes;
@@ -38,7 +39,7 @@ impl Envmap {
         };
         // ---- The cell of each lane: row, then column (alias tables in lanes) ----
         let (j, t_u) = rows.sample(&[0; WIDTH], u.x);
-        let (i, s_u) = self.column_lanes.sample(&j, u.y);
+        let (i, s_u) = self.columns.sample(&j, u.y);
         let has_columns = lanes::gather_u32(&self.has_columns, &j);
         let sampled = active & bits(|k| has_columns[k] != 0);
         if sampled == 0 {
