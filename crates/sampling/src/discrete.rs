@@ -255,8 +255,9 @@ mod tests {
     use glam::Vec2;
 
     /// [`AliasLanes::sample`] and [`AliasLanes::sample_one`] are
-    /// [`DiscreteDistribution::sample`] of each lane's table bit for bit: tables with zero weights, one dominant weight, equal weights and a table
-    /// never drawn from; values at 0, next to 1, at 1 and beyond, negative and NaN.
+    /// [`DiscreteDistribution::sample`] of each lane's table bit for bit: tables with zero
+    /// weights, one dominant weight, equal weights and a table never drawn from; values at 0,
+    /// next to 1, at 1 and beyond, negative and NaN.
     #[test]
     fn alias_lanes_are_the_scalar_samples() {
         use rand::{Rng, SeedableRng};
