@@ -76,10 +76,9 @@ pub struct Envmap {
     /// zenith). Interpolated in it, t keeps its precision in the rows next to the poles, where
     /// cos θ itself varies by a few ulps only (`cell_cos_sin`, `cell_t`).
     cell_pole_dist: Vec<[f32; 2]>,
-    /// Row of cells ∝ its weight; `None` when the map is black (nothing to sample).
-    rows: Option<DiscreteDistribution>,
-    /// `rows` as a table for drawing in lanes (`lanes.rs`).
-    row_lanes: Option<AliasLanes>,
+    /// Row of cells ∝ its weight (one table); `None` when the map is black (nothing to
+    /// sample).
+    rows: Option<AliasLanes>,
     /// Per row of cells j, table j: the column ∝ mean corner weight; and whether row j has
     /// any weight to sample (1) or not (0: its table keeps every index and is never used).
     columns: AliasLanes,
@@ -163,7 +162,8 @@ impl Envmap {
             row_weight[j] = row_sum as f32;
             total += row_sum;
         }
-        let rows = DiscreteDistribution::new(&row_weight);
+        let rows =
+            DiscreteDistribution::new(&row_weight).map(|r| AliasLanes::new(h - 1, [Some(r)]));
         let mut has_columns = vec![0; h - 1];
         let columns = AliasLanes::new(
             w,
@@ -173,7 +173,6 @@ impl Envmap {
                 row
             }),
         );
-        let row_lanes = rows.as_ref().map(|r| AliasLanes::new(h - 1, [Some(r)]));
         let inv_total = if total > 0.0 {
             (1.0 / total) as f32
         } else {
@@ -189,7 +188,6 @@ impl Envmap {
             row_cos,
             cell_pole_dist,
             rows,
-            row_lanes,
             columns,
             has_columns,
             weight,
@@ -337,14 +335,13 @@ impl Envmap {
     /// the module docs).
     #[inline]
     pub fn sample_direction(&self, u: Vec2) -> Option<EmitterSample> {
-        let row = self.rows.as_ref()?.sample(u.x);
-        let j = row.index;
+        let (j, t) = self.rows.as_ref()?.sample_one(0, u.x);
         if self.has_columns[j] == 0 {
             return None;
         }
         let (i, s) = self.columns.sample_one(j, u.y);
         let corners = self.corners(i, j);
-        let st = warp::square_to_bilinear(Vec2::new(s, row.u_remapped), corners);
+        let st = warp::square_to_bilinear(Vec2::new(s, t), corners);
         let (cos_theta, sin_theta) = self.cell_cos_sin(j, st.y);
         let (sin_phi, cos_phi) =
             radia_math::trig::sin_cos_turns((i as f32 + 0.5 + st.x) / self.width as f32);

@@ -34,7 +34,7 @@ impl Envmap {
         out: &mut EmitterSampleLanes,
     ) {
         out.valid &= !active;
-        let Some(rows) = self.row_lanes.as_ref() else {
+        let Some(rows) = self.rows.as_ref() else {
             return;
         };
         // ---- The cell of each lane: row, then column (alias tables in lanes) ----
