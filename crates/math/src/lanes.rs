@@ -163,6 +163,47 @@ pub fn gather_u32(base: &[u32], idx: &[u32; WIDTH]) -> [u32; WIDTH] {
     out
 }
 
+/// Reads of several tables by the same sixteen indices, planned once ([`Lookup::new`]):
+/// where the indices name at most two entries (the one or two triangles of a rectangle
+/// light, the face that a pixel's rays all hit), each read is two broadcast loads and a
+/// blend; otherwise a [`gather`], sixteen loads in one instruction, which takes several times
+/// as long. Either way lane k reads `base[idx[k]]`, the same bits.
+#[derive(Clone, Copy)]
+pub struct Lookup<'a> {
+    idx: &'a [u32; WIDTH],
+    /// The first lane's index, another one (or the same), and the lanes that hold the other.
+    few: Option<(usize, usize, f32x16)>,
+}
+
+impl<'a> Lookup<'a> {
+    #[inline(always)]
+    pub fn new(idx: &'a [u32; WIDTH]) -> Self {
+        // (Over all sixteen lanes: vector comparisons.)
+        let not_equal = |v: u32| {
+            let mut bits = 0u32;
+            for (k, &i) in idx.iter().enumerate() {
+                bits |= u32::from(i != v) << k;
+            }
+            bits
+        };
+        let first = idx[0];
+        let others = not_equal(first);
+        let second = idx[(others.trailing_zeros() as usize).min(WIDTH - 1)];
+        let few = (others & not_equal(second) == 0)
+            .then(|| (first as usize, second as usize, mask(others)));
+        Self { idx, few }
+    }
+
+    /// `base[idx[k]]` in each lane k. Panics if an index is out of bounds.
+    #[inline(always)]
+    pub fn read(&self, base: &[f32]) -> f32x16 {
+        match self.few {
+            Some((a, b, at_b)) => at_b.select(f32x16::splat(base[b]), f32x16::splat(base[a])),
+            None => gather(base, self.idx),
+        }
+    }
+}
+
 /// The lanes whose bits are set in `bits` (bit k: lane k), lowest first: the loops over the
 /// lanes a step leaves to one-lane code.
 #[inline(always)]
@@ -353,6 +394,32 @@ mod tests {
         let mut idx = [0u32; WIDTH];
         idx[9] = 8;
         gather(&base, &idx);
+    }
+
+    /// A lookup reads what a gather reads, bit for bit, whether the lanes name one entry,
+    /// two (in any lanes) or more, and refuses an index out of bounds as it does.
+    #[test]
+    fn lookup_reads_what_the_gather_reads() {
+        let base: Vec<f32> = (0..40).map(|i| (i as f32 * 0.37).sin() * 1e3).collect();
+        let mut cases: Vec<[u32; WIDTH]> = vec![[0; WIDTH], [39; WIDTH]];
+        for seed in 0..200u32 {
+            let distinct = 1 + seed % 4;
+            cases.push(std::array::from_fn(|k| {
+                let h = (k as u32 + 1).wrapping_mul(seed.wrapping_mul(2654435761) | 1);
+                (h >> 7) % distinct * 13 % 40
+            }));
+        }
+        for idx in &cases {
+            let want = gather(&base, idx).to_array().map(f32::to_bits);
+            let got = Lookup::new(idx).read(&base).to_array().map(f32::to_bits);
+            assert_eq!(got, want, "{idx:?}");
+        }
+        let few = [5u32, 5, 9, 5, 9, 9, 5, 5, 5, 5, 9, 5, 5, 5, 5, 9];
+        assert!(Lookup::new(&few).few.is_some());
+        let many: [u32; WIDTH] = std::array::from_fn(|k| k as u32 % 3);
+        assert!(Lookup::new(&many).few.is_none());
+        let outside = [40u32; WIDTH];
+        assert!(std::panic::catch_unwind(|| Lookup::new(&outside).read(&base)).is_err());
     }
 
     #[test]

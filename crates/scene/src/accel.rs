@@ -533,17 +533,19 @@ impl Accel {
         self.owners[prim]
     }
 
-    /// The vertices of the triangles `prims[k]` in lanes (gathered from the copy the
-    /// traversal tests).
+    /// The vertices of the triangles `prims[k]` in lanes (read from the copy the traversal
+    /// tests).
     #[inline(always)]
     pub(crate) fn triangles(&self, prims: &[u32; 16]) -> [radia_math::lanes::Vec3s; 3] {
-        use radia_math::lanes::{gather, Vec3s};
-        let at = |a: usize| gather(self.lanes.coords(a), prims);
-        std::array::from_fn(|k| Vec3s {
-            x: at(3 * k),
-            y: at(3 * k + 1),
-            z: at(3 * k + 2),
-        })
+        use radia_math::lanes::{f32x16, Lookup, Vec3s};
+        let prims = Lookup::new(prims);
+        // (A loop, not closures, which the compiler may leave as calls.)
+        let mut c = [f32x16::ZERO; 9];
+        for (a, c) in c.iter_mut().enumerate() {
+            *c = prims.read(self.lanes.coords(a));
+        }
+        let vertex = |k: usize| Vec3s::new(c[3 * k], c[3 * k + 1], c[3 * k + 2]);
+        [vertex(0), vertex(1), vertex(2)]
     }
 
     /// Primitive `prim` (BVH order, as in [`Hit::prim`]): its shape and face, a triangle's

@@ -18,7 +18,7 @@ use super::{LightTriangle, MAX_SPHERICAL_SAMPLE_AREA, MIN_SPHERICAL_SAMPLE_AREA}
 use crate::spherical::{self, Vec3x8};
 use glam::Vec3;
 use radia_math::float::gamma;
-use radia_math::lanes::{self, f32x16, gather, Vec3s, WIDTH};
+use radia_math::lanes::{self, f32x16, Lookup, Vec3s, WIDTH};
 use radia_math::real::Vector2;
 use radia_math::INV_TWO_PI;
 use wide::f64x8;
@@ -74,12 +74,12 @@ impl LightTriangleTable {
 
     /// Vector field `i` (v0, v1, v2, twice_area_n, n, centroid, n0, n1, n2).
     #[inline(always)]
-    fn vector(&self, i: usize, index: &[u32; WIDTH]) -> Vec3s {
+    fn vector(&self, i: usize, index: &Lookup) -> Vec3s {
         let first = if i < 6 { 3 * i } else { 3 * i + 2 };
         Vec3s {
-            x: gather(&self.fields[first], index),
-            y: gather(&self.fields[first + 1], index),
-            z: gather(&self.fields[first + 2], index),
+            x: index.read(&self.fields[first]),
+            y: index.read(&self.fields[first + 1]),
+            z: index.read(&self.fields[first + 2]),
         }
     }
 }
@@ -165,7 +165,7 @@ impl LightTriangles {
         ref_p: Vec3s,
         u: Vector2<f32x16>,
     ) -> LaneSamples {
-        let index = &self.index;
+        let index = &Lookup::new(&self.index);
         let n = table.vector(4, index);
 
         // ---- `spherical_sampling`: by area, or by solid angle ----
@@ -173,7 +173,7 @@ impl LightTriangles {
         // compute it (eight at a time, as the scalar code does: `spherical.rs`).
         let to_c = table.vector(5, index) - ref_p;
         let d2 = to_c.length_squared();
-        let r2 = gather(&table.fields[19], index);
+        let r2 = index.read(&table.fields[19]);
         let far = d2.simd_gt(f32x16::splat(4.0) * r2);
         let estimate =
             f32x16::splat(0.5) * table.vector(3, index).dot(to_c).abs() / (d2 * d2.sqrt());
@@ -199,7 +199,7 @@ impl LightTriangles {
         let below_max = omega.simd_le(max);
         let spherical = far.select(omega.simd_gt(f32x16::ZERO), omega.simd_ge(min)) & below_max;
         let by_solid_angle = exact & spherical.to_bitmask();
-        let side = gather(&table.fields[SIDE], index);
+        let side = index.read(&table.fields[SIDE]);
         let flat = side.simd_eq(f32x16::ZERO).to_bitmask();
 
         // ---- `sample_position`: uniform on the triangle; or `sample_spherical_triangle` ----
@@ -230,7 +230,7 @@ impl LightTriangles {
         let e1 = v[1] - v0;
         let e2 = v[2] - v0;
         let (p, p_error) = triangle_point(v0, e1, e2, b1, b2);
-        let pdf_area = f32x16::ONE / gather(&table.fields[18], index);
+        let pdf_area = f32x16::ONE / index.read(&table.fields[18]);
 
         // ---- `emitted_normal`: the normal the light glows about ----
         let smooth = self.lanes & !flat;
