@@ -178,14 +178,8 @@ pub struct Lookup<'a> {
 impl<'a> Lookup<'a> {
     #[inline(always)]
     pub fn new(idx: &'a [u32; WIDTH]) -> Self {
-        // (Over all sixteen lanes: vector comparisons.)
-        let not_equal = |v: u32| {
-            let mut bits = 0u32;
-            for (k, &i) in idx.iter().enumerate() {
-                bits |= u32::from(i != v) << k;
-            }
-            bits
-        };
+        let lanes = wide::u32x16::new(*idx);
+        let not_equal = |v: u32| !lanes.simd_eq(wide::u32x16::splat(v)).to_bitmask() & 0xffff;
         let first = idx[0];
         let others = not_equal(first);
         let second = idx[(others.trailing_zeros() as usize).min(WIDTH - 1)];

@@ -99,6 +99,47 @@ pub struct Lights {
     selector: Selector,
     /// The flat triangles among the primitives, for light sampling in lanes.
     triangles: LightTriangleTable,
+    /// How each primitive is sampled in lanes.
+    lane_lights: Vec<LaneLight>,
+}
+
+/// How [`Scene::sample_emitter_directions`] samples a light primitive, decided once from its
+/// emitter and shape (rather than for every lane of every packet).
+#[derive(Clone, Copy, Debug)]
+enum LaneLight {
+    /// A constant environment of this radiance.
+    Uniform(Vec3),
+    /// An environment map.
+    Envmap,
+    /// A flat triangle of this constant radiance ([`LightTriangleTable`]).
+    Triangle(Vec3),
+    /// A sphere of this constant radiance: centre, radius, `flip_normals`.
+    Sphere(Vec3, (Vec3, f32, bool)),
+    /// Any other: sampled one lane at a time.
+    Scalar,
+}
+
+impl LaneLight {
+    fn of(emitter: &Emitter, shapes: &[Shape], face: u32) -> Self {
+        match emitter {
+            Emitter::Constant(light) => Self::Uniform(light.radiance),
+            Emitter::Envmap(_) => Self::Envmap,
+            Emitter::Area(light) => {
+                let Texture::Constant(c) = light.radiance else {
+                    return Self::Scalar;
+                };
+                let shape = &shapes[light.shape as usize];
+                if shape.lane_light_triangle(face).is_some() {
+                    Self::Triangle(c)
+                } else if let Some(sphere) = shape.light_sphere() {
+                    Self::Sphere(c, sphere)
+                } else {
+                    Self::Scalar
+                }
+            }
+            _ => Self::Scalar,
+        }
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -221,11 +262,16 @@ impl Lights {
                 Emitter::Area(a) => shapes[a.shape as usize].lane_light_triangle(p.face),
                 _ => None,
             }));
+        let lane_lights = prims
+            .iter()
+            .map(|p| LaneLight::of(&emitters[p.emitter as usize], shapes, p.face))
+            .collect();
         Self {
             prims,
             first_prim,
             selector,
             triangles,
+            lane_lights,
         }
     }
 
@@ -450,34 +496,26 @@ impl Scene {
             let prim = self.lights.prim(index);
             chosen[k] = (prim, prim_pmf);
             pmf.set_lane(k, prim_pmf);
-            match &self.emitters[prim.emitter as usize] {
-                Emitter::Constant(light) => {
+            match self.lights.lane_lights[index] {
+                LaneLight::Uniform(r) => {
                     uniform |= 1 << k;
-                    radiance.set_lane(k, light.radiance);
+                    radiance.set_lane(k, r);
                     continue;
                 }
                 // (A scene has one environment: another map would go to the scalar code.)
-                Emitter::Envmap(_) if *envmap.get_or_insert(prim.emitter) == prim.emitter => {
+                LaneLight::Envmap if *envmap.get_or_insert(prim.emitter) == prim.emitter => {
                     mapped |= 1 << k;
                     continue;
                 }
-                Emitter::Area(light) => {
-                    if let Texture::Constant(c) = light.radiance {
-                        let shape = &self.shapes[light.shape as usize];
-                        let pushed = if shape.lane_light_triangle(prim.face).is_some() {
-                            triangles.push(k, index as u32);
-                            true
-                        } else if let Some(sphere) = shape.light_sphere() {
-                            spheres.push(k, sphere);
-                            true
-                        } else {
-                            false
-                        };
-                        if pushed {
-                            radiance.set_lane(k, c);
-                            continue;
-                        }
-                    }
+                LaneLight::Triangle(r) => {
+                    triangles.push(k, index as u32);
+                    radiance.set_lane(k, r);
+                    continue;
+                }
+                LaneLight::Sphere(r, sphere) => {
+                    spheres.push(k, sphere);
+                    radiance.set_lane(k, r);
+                    continue;
                 }
                 _ => {}
             }
