@@ -99,12 +99,13 @@ pub struct Lights {
     selector: Selector,
     /// The flat triangles among the primitives, for light sampling in lanes.
     triangles: LightTriangleTable,
-    /// How each primitive is sampled in lanes.
+    /// How each emitter's primitives are sampled in lanes, by emitter (the same for every
+    /// face of a mesh: an emitting mesh has a light triangle for each).
     lane_lights: Vec<LaneLight>,
 }
 
-/// How [`Scene::sample_emitter_directions`] samples a light primitive, decided once from its
-/// emitter and shape (rather than for every lane of every packet).
+/// How [`Scene::sample_emitter_directions`] samples an emitter's light primitives, decided
+/// once from the emitter and its shape (rather than for every lane of every packet).
 #[derive(Clone, Copy, Debug)]
 enum LaneLight {
     /// A constant environment of this radiance.
@@ -120,7 +121,7 @@ enum LaneLight {
 }
 
 impl LaneLight {
-    fn of(emitter: &Emitter, shapes: &[Shape], face: u32) -> Self {
+    fn of(emitter: &Emitter, shapes: &[Shape]) -> Self {
         match emitter {
             Emitter::Constant(light) => Self::Uniform(light.radiance),
             Emitter::Envmap(_) => Self::Envmap,
@@ -129,7 +130,7 @@ impl LaneLight {
                     return Self::Scalar;
                 };
                 let shape = &shapes[light.shape as usize];
-                if shape.lane_light_triangle(face).is_some() {
+                if shape.lane_light_triangle(0).is_some() {
                     Self::Triangle(c)
                 } else if let Some(sphere) = shape.light_sphere() {
                     Self::Sphere(c, sphere)
@@ -262,10 +263,7 @@ impl Lights {
                 Emitter::Area(a) => shapes[a.shape as usize].lane_light_triangle(p.face),
                 _ => None,
             }));
-        let lane_lights = prims
-            .iter()
-            .map(|p| LaneLight::of(&emitters[p.emitter as usize], shapes, p.face))
-            .collect();
+        let lane_lights = emitters.iter().map(|e| LaneLight::of(e, shapes)).collect();
         Self {
             prims,
             first_prim,
@@ -496,7 +494,7 @@ impl Scene {
             let prim = self.lights.prim(index);
             chosen[k] = (prim, prim_pmf);
             pmf.set_lane(k, prim_pmf);
-            match self.lights.lane_lights[index] {
+            match self.lights.lane_lights[prim.emitter as usize] {
                 LaneLight::Uniform(r) => {
                     uniform |= 1 << k;
                     radiance.set_lane(k, r);
