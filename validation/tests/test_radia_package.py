@@ -145,6 +145,9 @@ class RenderTest(unittest.TestCase):
 
     def test_ctrl_c_interrupts_the_render(self):
         scene = radia.load_file(SIMPLE, res=128)
+        # Python's own SIGINT handler, as in a terminal: a process started in the background
+        # by a non-interactive shell (`cmd &`) inherits SIGINT ignored, and Python keeps it so.
+        previous = signal.signal(signal.SIGINT, signal.default_int_handler)
         timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
         t0 = time.perf_counter()
         timer.start()
@@ -153,6 +156,7 @@ class RenderTest(unittest.TestCase):
                 radia.render(scene, spp=1 << 16)  # minutes if not interrupted
         finally:
             timer.cancel()
+            signal.signal(signal.SIGINT, previous)
         self.assertLess(time.perf_counter() - t0, 5.0)
 
 
