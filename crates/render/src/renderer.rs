@@ -21,8 +21,8 @@ use glam::{UVec2, Vec2};
 use radia_math::{Ray, Spectrum};
 use radia_sampling::{with_sampler, AnySampler, PixelKey, SampleStream, Sampler, SamplerKind};
 use radia_scene::{AovDesc, Scene};
-use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::Mutex;
 use std::time::Instant;
 
 /// Tile edge in pixels: the largest of 32, 16, 8 that still cuts the image into at least
@@ -522,6 +522,10 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
         .flat_map(|ty| (0..w.div_ceil(tile)).map(move |tx| (tx * tile, ty * tile)))
         .collect();
     let done = AtomicU64::new(0);
+    // Seconds per sample of each tile in its last pass with samples, and over the last pass's
+    // tiles: the order in which the next pass hands out its tiles (`longest_first`).
+    let mut tile_pace: Vec<Option<f64>> = vec![None; tiles.len()];
+    let mut mean_pace = 1.0;
 
     // Adaptive sampling: passes up to the pilot's spp gather each pixel's statistics, then
     // each pixel gets its count, and each of the passes that the rest of the budget makes
@@ -567,9 +571,25 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
             },
             _ => PassSamples::Even(spp_start..spp_end),
         };
-        let results: Vec<Option<TileResult<E::Film>>> = tiles
-            .par_iter()
+        // Each tile's expected time in this pass: its samples at the time per sample it took
+        // in its last pass (the first pass: its samples alone).
+        let tile_samples: Vec<u64> = tiles
+            .iter()
             .map(|&(x0, y0)| {
+                let (tw, th) = (tile.min(w - x0), tile.min(h - y0));
+                (y0..y0 + th)
+                    .flat_map(|y| (x0..x0 + tw).map(move |x| (x, y)))
+                    .map(|(x, y)| pass.len(x, y) as u64)
+                    .sum()
+            })
+            .collect();
+        let expected: Vec<f64> = tile_samples
+            .iter()
+            .zip(&tile_pace)
+            .map(|(&n, pace)| n as f64 * pace.unwrap_or(mean_pace))
+            .collect();
+        let (results, seconds): (Vec<Option<TileResult<E::Film>>>, Vec<f64>) =
+            longest_first(&tiles, &expected, |&(x0, y0)| {
                 if cancel.load(Ordering::Relaxed) {
                     return None;
                 }
@@ -671,10 +691,21 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
                     samples: n,
                     pilot: tile_pilot,
                 })
-            })
-            .collect();
+            });
         if results.iter().any(Option::is_none) {
             break;
+        }
+        for ((pace, &n), &s) in tile_pace.iter_mut().zip(&tile_samples).zip(&seconds) {
+            if n > 0 {
+                *pace = Some(s / n as f64);
+            }
+        }
+        let (sum_s, sum_n) = (
+            seconds.iter().sum::<f64>(),
+            tile_samples.iter().sum::<u64>(),
+        );
+        if sum_n > 0 {
+            mean_pace = sum_s / sum_n as f64;
         }
         for (r, &(x0, y0)) in results.into_iter().flatten().zip(&tiles) {
             film.merge(&r.film);
@@ -707,4 +738,38 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
         },
     };
     (out, extras_film)
+}
+
+/// `f` of every item, in parallel on the current thread pool, in the items' order; and the
+/// seconds each call took. The items are handed out one at a time, those of the largest
+/// `expected` time first (Graham's longest-processing-time rule): a pass ends when its last
+/// tile does, and a long tile started last would leave the other threads idle meanwhile
+/// (adaptive sampling gives some tiles sixteen times the samples of others). Which thread
+/// runs an item and when changes nothing in its result.
+fn longest_first<T: Sync, R: Send>(
+    items: &[T],
+    expected: &[f64],
+    f: impl Fn(&T) -> R + Sync,
+) -> (Vec<R>, Vec<f64>) {
+    let mut order: Vec<usize> = (0..items.len()).collect();
+    // Stable: equal expectations keep the items' order.
+    order.sort_by(|&a, &b| expected[b].total_cmp(&expected[a]));
+    let next = AtomicUsize::new(0);
+    let slots: Vec<Mutex<Option<(R, f64)>>> = items.iter().map(|_| Mutex::new(None)).collect();
+    rayon::broadcast(|_| loop {
+        let k = next.fetch_add(1, Ordering::Relaxed);
+        let Some(&i) = order.get(k) else { break };
+        let start = Instant::now();
+        let r = f(&items[i]);
+        let s = start.elapsed().as_secs_f64();
+        *slots[i].lock().unwrap_or_else(|e| e.into_inner()) = Some((r, s));
+    });
+    slots
+        .into_iter()
+        .map(|m| {
+            m.into_inner()
+                .unwrap_or_else(|e| e.into_inner())
+                .expect("every item is handed out")
+        })
+        .unzip()
 }
