@@ -773,3 +773,42 @@ fn longest_first<T: Sync, R: Send>(
         })
         .unzip()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn longest_first_maps_every_item_once_in_order() {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let items: Vec<u32> = (0..37).collect();
+        // Expected times out of order, with ties.
+        let expected: Vec<f64> = items.iter().map(|&i| ((i * 7) % 5) as f64).collect();
+        let calls = AtomicUsize::new(0);
+        let (out, seconds) = pool.install(|| {
+            longest_first(&items, &expected, |&i| {
+                calls.fetch_add(1, Ordering::Relaxed);
+                i * i
+            })
+        });
+        assert_eq!(calls.into_inner(), items.len());
+        assert_eq!(out, items.iter().map(|&i| i * i).collect::<Vec<_>>());
+        assert_eq!(seconds.len(), items.len());
+        assert!(seconds.iter().all(|&s| s >= 0.0 && s.is_finite()));
+        // Nothing to do is nothing done.
+        let (none, s): (Vec<u32>, Vec<f64>) = longest_first(&[] as &[u32], &[], |&i| i);
+        assert!(none.is_empty() && s.is_empty());
+    }
+
+    #[test]
+    fn longest_first_hands_out_the_longest_first() {
+        // One thread: the calls come in the order the items are handed out.
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let items: Vec<usize> = (0..6).collect();
+        let expected = [1.0, 5.0, 0.0, 5.0, 3.0, 2.0];
+        let order = Mutex::new(Vec::new());
+        pool.install(|| longest_first(&items, &expected, |&i| order.lock().unwrap().push(i)));
+        // Ties keep the items' order.
+        assert_eq!(order.into_inner().unwrap(), [1, 3, 4, 5, 0, 2]);
+    }
+}
