@@ -780,7 +780,10 @@ mod tests {
 
     #[test]
     fn longest_first_maps_every_item_once_in_order() {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
         let items: Vec<u32> = (0..37).collect();
         // Expected times out of order, with ties.
         let expected: Vec<f64> = items.iter().map(|&i| ((i * 7) % 5) as f64).collect();
@@ -803,7 +806,10 @@ mod tests {
     #[test]
     fn longest_first_hands_out_the_longest_first() {
         // One thread: the calls come in the order the items are handed out.
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
         let items: Vec<usize> = (0..6).collect();
         let expected = [1.0, 5.0, 0.0, 5.0, 3.0, 2.0];
         let order = Mutex::new(Vec::new());
