@@ -21,6 +21,7 @@ use glam::{UVec2, Vec2};
 use radia_math::{Ray, Spectrum};
 use radia_sampling::{with_sampler, AnySampler, PixelKey, SampleStream, Sampler, SamplerKind};
 use radia_scene::{AovDesc, Scene};
+use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
@@ -756,14 +757,19 @@ fn longest_first<T: Sync, R: Send>(
     order.sort_by(|&a, &b| expected[b].total_cmp(&expected[a]));
     let next = AtomicUsize::new(0);
     let slots: Vec<Mutex<Option<(R, f64)>>> = items.iter().map(|_| Mutex::new(None)).collect();
-    rayon::broadcast(|_| loop {
-        let k = next.fetch_add(1, Ordering::Relaxed);
-        let Some(&i) = order.get(k) else { break };
-        let start = Instant::now();
-        let r = f(&items[i]);
-        let s = start.elapsed().as_secs_f64();
-        *slots[i].lock().unwrap_or_else(|e| e.into_inner()) = Some((r, s));
-    });
+    // One worker per thread of the pool, each taking the next item until none is left (a
+    // thread busy elsewhere leaves its share to the others; `rayon::broadcast` would wait
+    // for it).
+    (0..rayon::current_num_threads())
+        .into_par_iter()
+        .for_each(|_| loop {
+            let k = next.fetch_add(1, Ordering::Relaxed);
+            let Some(&i) = order.get(k) else { break };
+            let start = Instant::now();
+            let r = f(&items[i]);
+            let s = start.elapsed().as_secs_f64();
+            *slots[i].lock().unwrap_or_else(|e| e.into_inner()) = Some((r, s));
+        });
     slots
         .into_iter()
         .map(|m| {
