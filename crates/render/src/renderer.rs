@@ -589,14 +589,18 @@ fn render_with<S: Sampler, I: Integrator, E: Extras>(
             .zip(&tile_pace)
             .map(|(&n, pace)| n as f64 * pace.unwrap_or(mean_pace))
             .collect();
+        let work: Vec<((u32, u32), u64)> = tiles
+            .iter()
+            .copied()
+            .zip(tile_samples.iter().copied())
+            .collect();
         let (results, seconds): (Vec<Option<TileResult<E::Film>>>, Vec<f64>) =
-            longest_first(&tiles, &expected, |&(x0, y0)| {
+            longest_first(&work, &expected, |&((x0, y0), n)| {
                 if cancel.load(Ordering::Relaxed) {
                     return None;
                 }
                 let (tw, th) = (tile.min(w - x0), tile.min(h - y0));
                 let pixels = || (y0..y0 + th).flat_map(move |y| (x0..x0 + tw).map(move |x| (x, y)));
-                let n: u64 = pixels().map(|(x, y)| pass.len(x, y) as u64).sum();
                 let mut tile_pilot = gathering.then(|| PilotStats::new(tw, th, block));
                 // Each sample's pixel, in the order the samples come (`TileSamples`).
                 let mut sample_pixels = pixels().flat_map(|(x, y)| {
@@ -784,12 +788,16 @@ fn longest_first<T: Sync, R: Send>(
 mod tests {
     use super::*;
 
+    fn pool(threads: usize) -> rayon::ThreadPool {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+    }
+
     #[test]
     fn longest_first_maps_every_item_once_in_order() {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
+        let pool = pool(2);
         let items: Vec<u32> = (0..37).collect();
         // Expected times out of order, with ties.
         let expected: Vec<f64> = items.iter().map(|&i| ((i * 7) % 5) as f64).collect();
@@ -812,10 +820,7 @@ mod tests {
     #[test]
     fn longest_first_hands_out_the_longest_first() {
         // One thread: the calls come in the order the items are handed out.
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
+        let pool = pool(1);
         let items: Vec<usize> = (0..6).collect();
         let expected = [1.0, 5.0, 0.0, 5.0, 3.0, 2.0];
         let order = Mutex::new(Vec::new());
