@@ -8,11 +8,13 @@
 //! `chi2_spherical_triangles_thin_and_wide`); and the two must agree on the solid angle (the
 //! sampling density is its reciprocal).
 //!
-//! They are written once, over eight shading points at a time (`wide::f64x8`, whose arcsine,
+//! They are written once, over eight shading points at a time (`wide::f64x8`, whose
 //! arctangent and sine/cosine are polynomials, Agner Fog's, instead of the C library's calls):
 //! the light samples of a packet's lanes (`shape/light_lanes.rs`) take them eight at a time,
 //! and one point ([`triangle_solid_angle`], [`sample_spherical_triangle`]) takes lane 0 of the
-//! same computation, so a lane holds bit for bit what the one-point code gives.
+//! same computation, so a lane holds bit for bit what the one-point code gives. One arctangent
+//! gives the solid angle and one sine/cosine the sample; the corner directions are found once
+//! for both ([`Subtended`]).
 
 use glam::{Vec2, Vec3};
 use wide::f64x8;
@@ -134,28 +136,32 @@ fn spherical_triangle_area(a: Vec3x8, b: Vec3x8, c: Vec3x8) -> f64x8 {
     (f64x8::splat(2.0) * a.dot(b.cross(c)).atan2(den)).abs()
 }
 
-/// Solid angles (sr) that the triangles `v` subtend from the points `p`, lane by lane; 0
-/// where `p` is a corner.
+/// What a triangle subtends from a point, per lane: the unit vectors towards its corners,
+/// the solid angle (sr, 0 where the point is a corner) and the lanes where the point is none
+/// of them. Made once per lane for both the choice of strategy and the sample.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Subtended {
+    corners: [Vec3x8; 3],
+    pub(crate) omega: f64x8,
+    apart: f64x8,
+}
+
+/// What the triangles `v` subtend from the points `p`, lane by lane.
 #[inline(always)]
-pub(crate) fn triangle_solid_angles(v: &[Vec3x8; 3], p: Vec3x8) -> f64x8 {
-    let ([a, b, c], apart) = corner_directions(v, p);
-    apart.select(spherical_triangle_area(a, b, c), f64x8::ZERO)
+pub(crate) fn subtended(v: &[Vec3x8; 3], p: Vec3x8) -> Subtended {
+    let (corners, apart) = corner_directions(v, p);
+    let [a, b, c] = corners;
+    Subtended {
+        corners,
+        omega: apart.select(spherical_triangle_area(a, b, c), f64x8::ZERO),
+        apart,
+    }
 }
 
 /// Solid angle (sr) that triangle `v` subtends from `p`; 0 when `p` is a corner.
 pub fn triangle_solid_angle(v: &[Vec3; 3], p: Vec3) -> f32 {
-    let omega = triangle_solid_angles(&v.map(Vec3x8::splat), Vec3x8::splat(p));
+    let omega = subtended(&v.map(Vec3x8::splat), Vec3x8::splat(p)).omega;
     omega.to_array()[0] as f32
-}
-
-/// The angles between the unit vectors `a` and `b`, accurate near 0 and π (pbrt-v4's
-/// `AngleBetween`).
-#[inline(always)]
-fn angle_between(a: Vec3x8, b: Vec3x8) -> f64x8 {
-    let obtuse = a.dot(b).simd_lt(f64x8::ZERO);
-    let chord = obtuse.select(a.add(b).length(), b.sub(a).length());
-    let half = f64x8::splat(2.0) * (chord / f64x8::splat(2.0)).min(f64x8::ONE).asin();
-    obtuse.select(f64x8::PI - half, half)
 }
 
 /// `v` minus its component along the unit vector `w`.
@@ -164,34 +170,44 @@ fn gram_schmidt(v: Vec3x8, w: Vec3x8) -> Vec3x8 {
     v.sub(w.scale(v.dot(w)))
 }
 
-/// Per lane, a direction uniformly distributed in the solid angle triangle `v` subtends from
-/// `p` (values `u0`, `u1`), returned as the barycentric coordinates (b1, b2) of the point of
-/// the triangle it reaches, and the lanes where there is one (bit k: lane k): not those with
-/// `p` in the triangle's plane or at a corner. The density is 1 / [`triangle_solid_angles`].
+/// Per lane, a direction uniformly distributed in the solid angle `s` that triangle `v`
+/// subtends from `p` ([`subtended`]; values `u0`, `u1`), returned as the barycentric
+/// coordinates (b1, b2) of the point of the triangle it reaches, and the lanes where there is
+/// one (bit k: lane k): not those with `p` in the triangle's plane or at a corner. The
+/// density is 1 / `s.omega`.
+///
+/// Arvo's algorithm as pbrt-v4 writes it, with two differences that change no distribution.
+/// The area of the spherical triangle is `s.omega` (Van Oosterom and Strackee's arctangent,
+/// the very value whose reciprocal is the density) where pbrt sums the three corner angles
+/// and subtracts π, which needs all three angles (an arcsine each); and the one angle the
+/// warp does need, α at corner a, enters only through its sine and cosine, which are the
+/// cross and dot products of the two unit normals of the arcs that meet there. With
+/// A' = u0 · A, sin(π + A') = −sin A' and cos(π + A') = −cos A'.
 #[inline(always)]
 pub(crate) fn sample_spherical_triangles(
     v: &[Vec3x8; 3],
     p: Vec3x8,
+    s: &Subtended,
     u0: f64x8,
     u1: f64x8,
 ) -> ([f64x8; 2], u32) {
-    let (zero, one, pi) = (f64x8::ZERO, f64x8::ONE, f64x8::PI);
-    let ([a, b, c], apart) = corner_directions(v, p);
+    let (zero, one) = (f64x8::ZERO, f64x8::ONE);
+    let [a, b, c] = s.corners;
     let (n_ab, n_bc, n_ca) = (a.cross(b), b.cross(c), c.cross(a));
     let arcs = n_ab.length_squared().simd_gt(zero)
         & n_bc.length_squared().simd_gt(zero)
         & n_ca.length_squared().simd_gt(zero);
-    let (n_ab, n_bc, n_ca) = (n_ab.normalize(), n_bc.normalize(), n_ca.normalize());
-    // Angles at the vertices; the area is α + β + γ − π.
-    let alpha = angle_between(n_ab, n_ca.neg());
-    let beta = angle_between(n_bc, n_ab.neg());
-    let gamma = angle_between(n_ca, n_bc.neg());
+    // The angle α at a lies between the planes of the arcs a–b and a–c, whose unit normals
+    // are n_ab and −n_ca: cos α is their dot product, sin α (α in [0, π]) the length of their
+    // cross product.
+    let (n_ab, m_ac) = (n_ab.normalize(), n_ca.normalize().neg());
+    let cos_alpha = n_ab.dot(m_ac);
+    let sin_alpha = n_ab.cross(m_ac).length();
 
     // Choose the sub-triangle area A' = u0 · A and find the point c' on the arc a–c that
     // bounds it.
-    let ap_pi = pi + u0 * (alpha + beta + gamma - pi);
-    let (sin_alpha, cos_alpha) = alpha.sin_cos();
-    let (sin_ap, cos_ap) = ap_pi.sin_cos();
+    let (sin_area, cos_area) = (u0 * s.omega).sin_cos();
+    let (sin_ap, cos_ap) = (-sin_area, -cos_area);
     let sin_phi = sin_ap * cos_alpha - cos_ap * sin_alpha;
     let cos_phi = cos_ap * cos_alpha + sin_ap * sin_alpha;
     let k1 = cos_phi + cos_alpha;
@@ -216,13 +232,13 @@ pub(crate) fn sample_spherical_triangles(
     let (e1, e2) = (v[1].sub(v[0]), v[2].sub(v[0]));
     let s1 = w.cross(e2);
     let divisor = s1.dot(e1);
-    let s = p.sub(v[0]);
-    let b1 = (s.dot(s1) / divisor).max(zero).min(one);
-    let b2 = (w.dot(s.cross(e1)) / divisor).max(zero).min(one);
+    let sp = p.sub(v[0]);
+    let b1 = (sp.dot(s1) / divisor).max(zero).min(one);
+    let b2 = (w.dot(sp.cross(e1)) / divisor).max(zero).min(one);
     let sum = b1 + b2;
     let over = sum.simd_gt(one);
     let (b1, b2) = (over.select(b1 / sum, b1), over.select(b2 / sum, b2));
-    let valid = apart & arcs & defined & w.is_finite() & !divisor.simd_eq(zero);
+    let valid = s.apart & arcs & defined & w.is_finite() & !divisor.simd_eq(zero);
     ([b1, b2], valid.to_bitmask())
 }
 
@@ -232,12 +248,9 @@ pub(crate) fn sample_spherical_triangles(
 /// configurations (`p` in the triangle's plane or at a corner).
 pub fn sample_spherical_triangle(v: &[Vec3; 3], p: Vec3, u: Vec2) -> Option<[f32; 3]> {
     let value = |x: f32| f64x8::splat(f64::from(x));
-    let ([b1, b2], valid) = sample_spherical_triangles(
-        &v.map(Vec3x8::splat),
-        Vec3x8::splat(p),
-        value(u.x),
-        value(u.y),
-    );
+    let (v, p) = (v.map(Vec3x8::splat), Vec3x8::splat(p));
+    let s = subtended(&v, p);
+    let ([b1, b2], valid) = sample_spherical_triangles(&v, p, &s, value(u.x), value(u.y));
     let (b1, b2) = (b1.to_array()[0], b2.to_array()[0]);
     (valid & 1 != 0).then(|| barycentrics(b1, b2))
 }

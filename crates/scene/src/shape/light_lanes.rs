@@ -187,9 +187,9 @@ impl LightTriangles {
         let mut omega = [0.0f32; WIDTH];
         for half in halves(exact) {
             let (corners, ref_p) = (v.map(|c| half_x8(c, half)), half_x8(ref_p, half));
-            let o = spherical::triangle_solid_angles(&corners, ref_p);
-            omega[8 * half..8 * half + 8].copy_from_slice(&o.to_array().map(|o| o as f32));
-            wide_halves[half] = Some((corners, ref_p));
+            let s = spherical::subtended(&corners, ref_p);
+            omega[8 * half..8 * half + 8].copy_from_slice(&s.omega.to_array().map(|o| o as f32));
+            wide_halves[half] = Some((corners, ref_p, s));
         }
         let omega = f32x16::new(omega);
         let (min, max) = (
@@ -210,10 +210,15 @@ impl LightTriangles {
         if by_solid_angle != 0 {
             let (mut s1, mut s2) = (b1.to_array(), b2.to_array());
             for half in halves(by_solid_angle) {
-                let (corners, ref_p) = wide_halves[half].expect("a half with exact lanes");
+                let (corners, ref_p, s) = wide_halves[half].expect("a half with exact lanes");
                 let value = |x: f32x16| f64x8::new(half_of(x, half).map(f64::from));
-                let ([c1, c2], valid) =
-                    spherical::sample_spherical_triangles(&corners, ref_p, value(u0), value(u1));
+                let ([c1, c2], valid) = spherical::sample_spherical_triangles(
+                    &corners,
+                    ref_p,
+                    &s,
+                    value(u0),
+                    value(u1),
+                );
                 let (c1, c2) = (c1.to_array(), c2.to_array());
                 for i in 0..8 {
                     let k = 8 * half + i;
