@@ -508,7 +508,7 @@ const FILM_LANES_FROM: u32 = 6;
 /// `[j][k]`, made for all lanes at once by samplers that can, if enough lanes are fresh;
 /// `None` for the others, whose values are drawn lane by lane from the streams.
 #[inline(always)]
-fn film_values<S: Sampler>(paths: &Paths<'_, S>, lanes: u32) -> Option<[[f32; LANES]; 8]> {
+fn film_values<S: Sampler>(paths: &Paths<'_, S>, lanes: u32) -> Option<[[f32; LANES]; 2]> {
     const _: () = assert!(layout::FILM % 4 == 0);
     if lanes.count_ones() < FILM_LANES_FROM {
         return None;
@@ -529,15 +529,16 @@ fn bounce_values<S: Sampler>(paths: &Paths<'_, S>, lanes: u32) -> Option<[f32x16
     block_values(paths, lanes, &blocks).map(|out| out.map(f32x16::new))
 }
 
-/// Values `4 blocks[k] .. 4 blocks[k] + 8` of each lane k of `lanes` ([`Sampler::get_block_lanes`]
-/// of the lanes' samples), value j in `[j][k]`; `None` for samplers that make no blocks.
+/// Values `4 blocks[k] .. 4 blocks[k] + N` (N ≤ 8) of each lane k of `lanes`
+/// ([`Sampler::get_block_lanes`] of the lanes' samples), value j in `[j][k]`; `None` for
+/// samplers that make no blocks.
 #[inline(always)]
-fn block_values<S: Sampler>(
+fn block_values<S: Sampler, const N: usize>(
     paths: &Paths<'_, S>,
     lanes: u32,
     blocks: &[u32; LANES],
-) -> Option<[[f32; LANES]; 8]> {
-    let mut out = [[0.0; LANES]; 8];
+) -> Option<[[f32; LANES]; N]> {
+    let mut out = [[0.0; LANES]; N];
     paths.stream[0]
         .sampler()
         .get_block_lanes(

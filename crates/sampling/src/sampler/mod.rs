@@ -87,9 +87,10 @@ pub trait Sampler: Sync + Send {
     /// key, sample index, block and `prepared` (its [`Sampler::prepare`], also
     /// [`SampleStream::prepared`]): for each lane `k` set in `lanes` (bit `k`), `out[j][k]`
     /// becomes value `j` of `get_block(keys[k], indices[k], blocks[k], prepared[k])`, bit for
-    /// bit; the other lanes of `out` keep their values. A packet of paths then makes the
-    /// values of all its lanes' bounces in one call, by component. `false` (the default),
-    /// with `out` untouched, for samplers that make no blocks.
+    /// bit, for the first `out.len()` (at most 8) values `j`; the other lanes of `out` keep
+    /// their values. A packet of paths then makes the values of all its lanes' bounces in one
+    /// call, by component, and the values it does not use are not made. `false` (the
+    /// default), with `out` untouched, for samplers that make no blocks.
     #[inline(always)]
     fn get_block_lanes(
         &self,
@@ -98,7 +99,7 @@ pub trait Sampler: Sync + Send {
         _indices: &[u32; LANES],
         _blocks: &[u32; LANES],
         _prepared: &[u64; LANES],
-        _out: &mut [[f32; LANES]; 8],
+        _out: &mut [[f32; LANES]],
     ) -> bool {
         false
     }

@@ -123,9 +123,15 @@ impl SobolSampler {
     /// `prepared[k]` (its seed and shuffled index, [`Sampler::prepare`]) and blocks
     /// `blocks[k]` and `blocks[k] + 1`, by component: value `j` of every lane in `[j]`. Lanes
     /// whose `block + 1` is not below [`sobol_burley::NUM_DIMENSION_SETS_4D`] (past the
-    /// first dimension group) hold meaningless values.
+    /// first dimension group) hold meaningless values. Only the first `count` values are
+    /// made (the scrambles are most of the work); the others are 0.
     #[inline(always)]
-    fn set_pairs(&self, blocks: &[u32; LANES], prepared: &[u64; LANES]) -> [f32x16; 8] {
+    fn set_pairs(
+        &self,
+        blocks: &[u32; LANES],
+        prepared: &[u64; LANES],
+        count: usize,
+    ) -> [f32x16; 8] {
         // Each lane's eight Sobol integers, XORed from the rows of its index's four nibbles
         // in one 8-lane register, then turned by component. Lane by lane, not by gathers:
         // with 32 gathers of 16 lanes (vpgatherdd, one per nibble and value) the call took
@@ -144,6 +150,9 @@ impl SobolSampler {
         let block = u32x16::new(*blocks);
         let lane = [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8];
         std::array::from_fn(|j| {
+            if j >= count {
+                return f32x16::ZERO;
+            }
             let set = if j < 4 { block } else { block + u32x16::ONE };
             let scramble = lanes::hash(seed ^ set ^ u32x16::splat(lane[j & 3]));
             lanes::to_f32_norm(lanes::reverse_bits(lanes::owen_scramble_rev(
@@ -238,7 +247,7 @@ impl Sampler for SobolSampler {
         indices: &[u32; LANES],
         blocks: &[u32; LANES],
         prepared: &[u64; LANES],
-        out: &mut [[f32; LANES]; 8],
+        out: &mut [[f32; LANES]],
     ) -> bool {
         let sets = sobol_burley::NUM_DIMENSION_SETS_4D;
         let first = u32x16::new(*blocks)
@@ -246,7 +255,7 @@ impl Sampler for SobolSampler {
             .to_bitmask();
         let simd = first & lanes;
         if simd != 0 {
-            let values = self.set_pairs(blocks, prepared);
+            let values = self.set_pairs(blocks, prepared, out.len());
             let bit = u32x16::new(std::array::from_fn(|k| 1 << k));
             let simd = (u32x16::splat(simd) & bit).simd_eq(bit);
             for (row, v) in out.iter_mut().zip(values) {

@@ -704,6 +704,27 @@ fn sobol_block_lanes_are_get_block_in_each_lane() {
         let before: [[u32; LANES]; 8] = std::array::from_fn(|_| rng.random());
         let mut out = before.map(|row| row.map(f32::from_bits));
         assert!(s.get_block_lanes(lanes, &keys, &indices, &blocks, &prepared, &mut out));
+        // Fewer rows asked for: the same first values, and nothing written past them.
+        let rows = 1 + round % 7;
+        let mut first = out.map(|row| row.map(|_| -1.0f32));
+        assert!(s.get_block_lanes(
+            lanes,
+            &keys,
+            &indices,
+            &blocks,
+            &prepared,
+            &mut first[..rows]
+        ));
+        for (j, (row, full)) in first.iter().zip(&out).enumerate() {
+            for k in 0..LANES {
+                let want = if j < rows && lanes & (1 << k) != 0 {
+                    full[k]
+                } else {
+                    -1.0
+                };
+                assert_eq!(row[k].to_bits(), want.to_bits(), "{rows} rows: [{j}][{k}]");
+            }
+        }
         for k in 0..LANES {
             let got: [u32; 8] = std::array::from_fn(|j| out[j][k].to_bits());
             if lanes & (1 << k) == 0 {
