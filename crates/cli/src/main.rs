@@ -74,7 +74,8 @@ enum Command {
         #[arg(long, value_name = "box|gaussian", value_parser = parse_filter)]
         rfilter: Option<FilterDesc>,
         /// How next-event estimation chooses a light: uniform (Mitsuba's choice), power, or
-        /// bvh (a light BVH that accounts for distance and orientation; the default).
+        /// bvh (a light BVH that accounts for distance and orientation; the default). power
+        /// and bvh leave a constant environment to BSDF sampling, as pbrt-v4 does.
         #[arg(long, value_name = "uniform|power|bvh")]
         light_sampler: Option<LightSamplerKind>,
         /// Render passes of 16 spp until the next one would end after SECONDS, then write

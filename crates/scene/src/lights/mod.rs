@@ -177,7 +177,25 @@ impl Lights {
                 });
             }
         }
-        let weight = |p: &LightPrim| weight_of(sampling_weights, p.emitter);
+        // A constant environment is left to BSDF sampling under radia's own strategies (as
+        // pbrt-v4's path integrator leaves it: `UniformInfiniteLight::SampleLi` gives no
+        // sample when `allowIncompletePDF`, src/pbrt/lights.cpp): the BSDF's own samples
+        // follow the BSDF times a constant, where a uniform direction over the sphere misses
+        // it (half of them below the surface), and the light samples it would take go to the
+        // other lights. Its density for next-event estimation is then 0, so BSDF samples that
+        // escape take it at full weight: the estimate stays unbiased. Mitsuba's uniform
+        // choice (`--light-sampler uniform`) samples it as Mitsuba does.
+        let to_bsdf = |p: &LightPrim| {
+            kind != LightSamplerKind::Uniform
+                && matches!(emitters[p.emitter as usize], Emitter::Constant(_))
+        };
+        let weight = |p: &LightPrim| {
+            if to_bsdf(p) {
+                0.0
+            } else {
+                weight_of(sampling_weights, p.emitter)
+            }
+        };
         let power =
             |p: &LightPrim| emitters[p.emitter as usize].power(shapes, p.face, scene_sphere.1);
         // At most two bounded light primitives (a rectangle's two triangles, beside any
@@ -202,6 +220,7 @@ impl Lights {
         };
         let selector = match (prims.len(), structure) {
             (0, _) => Selector::Empty,
+            (1, _) if to_bsdf(&prims[0]) => Selector::Empty,
             (1, _) => Selector::Single,
             (_, LightSamplerKind::Uniform) => {
                 // Mitsuba: 1 / (number of emitters), or with sampling weights the emitter's

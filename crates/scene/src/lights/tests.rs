@@ -509,12 +509,13 @@ fn chi2_many_lights_mixed_by_bvh() {
 
 #[test]
 fn chi2_constant_environment() {
+    // (Mitsuba's uniform choice: radia's own leave a constant environment to BSDF sampling.)
     let s = scene(
         vec![],
         vec![EmitterDesc::Constant {
             radiance: Vec3::splat(2.0),
         }],
-        LightSamplerKind::Bvh,
+        LightSamplerKind::Uniform,
     );
     check_from(&s, Vec3::ZERO, Vec3::Z, Vec3::Z, PI, "constant");
 }
@@ -874,6 +875,11 @@ fn many_lights(kind: LightSamplerKind, with_infinite: bool) -> Scene {
             direction: Vec3::new(0.3, -1.0, 0.2),
             irradiance: Vec3::splat(2.0),
         });
+        emitters.push(EmitterDesc::Directional {
+            direction: Vec3::new(-0.5, -1.0, 0.1),
+            irradiance: Vec3::splat(0.7),
+        });
+        // Last: chosen by the uniform strategy only (`a_constant_environment_is_left_to_bsdf_sampling`).
         emitters.push(EmitterDesc::Constant {
             radiance: Vec3::splat(0.3),
         });
@@ -1384,14 +1390,15 @@ fn sampling_weights_mean_what_mitsuba_means() {
         let plain = per_emitter(&many_lights(kind, true));
         let weighted = per_emitter(&weighted_lights(kind));
         let w = weighted_lights(kind).sampling_weights;
-        // Power: any two emitters (0 and 1 are a sphere and a disk). BVH: the two at
-        // infinity (the tree's inner nodes merge bounds, so between two bounded lights a
-        // weight is not an exact factor on the odds, only on the light's own importance).
+        // Power: any two emitters (0 and 1 are a sphere and a disk). BVH: the two directional
+        // lights at infinity (the tree's inner nodes merge bounds, so between two bounded
+        // lights a weight is not an exact factor on the odds, only on the light's own
+        // importance). The last emitter, a constant environment, is never chosen by these.
         let n = w.len();
         let pairs: &[(usize, usize)] = if kind == LightSamplerKind::Power {
-            &[(0, 1), (0, 2), (n - 2, n - 1), (1, n - 1)]
+            &[(0, 1), (0, 2), (n - 3, n - 2), (1, n - 2)]
         } else {
-            &[(n - 2, n - 1)]
+            &[(n - 3, n - 2)]
         };
         for &(a, b) in pairs {
             assert!(
@@ -1407,6 +1414,62 @@ fn sampling_weights_mean_what_mitsuba_means() {
             );
         }
     }
+}
+
+#[test]
+fn a_constant_environment_is_left_to_bsdf_sampling() {
+    // Among other lights: radia's strategies never choose it and give it density 0 (so BSDF
+    // samples that escape take it at full weight), and their choices still sum to one;
+    // Mitsuba's uniform choice takes it as one emitter of N.
+    for kind in [
+        LightSamplerKind::Uniform,
+        LightSamplerKind::Power,
+        LightSamplerKind::Bvh,
+    ] {
+        let s = many_lights(kind, true);
+        let env = s.emitters.len() - 1;
+        assert!(matches!(s.emitters[env], Emitter::Constant(_)));
+        let env_prim = s.lights.prim_index(env as u32, 0);
+        for ctx in contexts() {
+            let total: f64 = (0..s.lights.len())
+                .map(|i| s.lights.pmf(&ctx, i) as f64)
+                .sum();
+            assert!((total - 1.0).abs() < 1e-4, "{kind}: pmfs sum to {total}");
+            let pmf = s.lights.pmf(&ctx, env_prim);
+            if kind == LightSamplerKind::Uniform {
+                let expected = 1.0 / s.emitters.len() as f32;
+                assert!((pmf - expected).abs() < 1e-6, "{kind}: {pmf} vs {expected}");
+            } else {
+                assert_eq!(pmf, 0.0, "{kind}");
+                assert_eq!(s.environment_pmf(env as u32), 0.0, "{kind}");
+                for k in 0..1000 {
+                    let u = (k as f32 + 0.5) / 1000.0;
+                    let chosen = s.lights.sample(&ctx, u).map(|(i, _)| i);
+                    assert_ne!(chosen, Some(env_prim), "{kind}: chosen with u = {u}");
+                }
+            }
+        }
+    }
+    // Alone, it leaves radia's strategies nothing to sample; the uniform one samples it.
+    let alone = |kind| {
+        scene(
+            vec![],
+            vec![EmitterDesc::Constant {
+                radiance: Vec3::splat(2.0),
+            }],
+            kind,
+        )
+    };
+    let ctx = contexts()[0];
+    for kind in [LightSamplerKind::Power, LightSamplerKind::Bvh] {
+        assert!(alone(kind)
+            .sample_emitter_direction(&ctx, 0.5, Vec2::splat(0.5))
+            .is_none());
+    }
+    let s = alone(LightSamplerKind::Uniform);
+    assert!(s
+        .sample_emitter_direction(&ctx, 0.5, Vec2::splat(0.5))
+        .is_some());
 }
 
 #[test]
