@@ -500,8 +500,9 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
 }
 
 /// Fresh lanes from which the film values are made all at once
-/// ([`Sampler::get_block_lanes`]): the call makes sixteen lanes' values in about the time of
-/// five or six one-lane calls.
+/// ([`Sampler::get_block_lanes`]): chosen when that call made eight values per lane, in about
+/// the time of five or six one-lane calls; it makes the two film values only since 2ebba6f, so
+/// the break-even is probably lower (not measured).
 const FILM_LANES_FROM: u32 = 6;
 
 /// The film values (`layout::FILM`) of the fresh samples of `lanes`, value j of lane k in

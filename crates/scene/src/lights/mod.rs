@@ -43,7 +43,8 @@ pub const LIGHT_LANES: usize = 16;
 pub enum LightSamplerKind {
     /// Uniformly over emitters, then by area over a mesh's triangles (Mitsuba's choice).
     Uniform,
-    /// In proportion to power.
+    /// In proportion to power. Like `Bvh`, leaves a constant environment to BSDF sampling
+    /// (see [`Lights::build`]).
     Power,
     /// By a light BVH that accounts for distance and orientation (radia's default).
     #[default]
