@@ -125,6 +125,13 @@ impl SpotLight {
         }
     }
 
+    /// The falloff seen from a point in direction `d` (unit, world space) from the light:
+    /// [`Self::falloff`] of the light's local direction `-d`.
+    #[inline]
+    pub fn falloff_towards(&self, d: Vec3) -> f32 {
+        self.falloff(self.to_local * -d)
+    }
+
     #[inline]
     pub fn sample_direction(&self, ref_p: Vec3) -> Option<EmitterSample> {
         let delta = self.position - ref_p;
@@ -134,7 +141,7 @@ impl SpotLight {
         }
         let dist = dist2.sqrt();
         let d = delta / dist;
-        let falloff = self.falloff(self.to_local * -d);
+        let falloff = self.falloff_towards(d);
         if !(falloff > 0.0) {
             return None;
         }

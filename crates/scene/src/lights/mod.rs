@@ -117,6 +117,11 @@ enum LaneLight {
     Triangle(Vec3),
     /// A sphere of this constant radiance: centre, radius, `flip_normals`.
     Sphere(Vec3, (Vec3, f32, bool)),
+    /// A point light (`spot`: a spot light, whose falloff is then found lane by lane) at
+    /// this position, of this intensity.
+    Point(Vec3, Vec3, bool),
+    /// A directional light: the direction towards it, its irradiance.
+    Directional(Vec3, Vec3),
     /// Any other: sampled one lane at a time.
     Scalar,
 }
@@ -139,7 +144,9 @@ impl LaneLight {
                     Self::Scalar
                 }
             }
-            _ => Self::Scalar,
+            Emitter::Point(light) => Self::Point(light.position, light.intensity, false),
+            Emitter::Spot(light) => Self::Point(light.position, light.intensity, true),
+            Emitter::Directional(light) => Self::Directional(-light.direction, light.irradiance),
         }
     }
 }
@@ -501,6 +508,10 @@ impl Scene {
         let mut uniform = 0u32;
         // Lanes that chose the environment map (`envmap`, an emitter index).
         let (mut mapped, mut envmap) = (0u32, None);
+        // Lanes that chose a point or spot light (`spots`), at `light_p`, or a directional
+        // light, towards `light_p`.
+        let (mut points, mut spots, mut directional) = (0u32, 0u32, 0u32);
+        let mut light_p = Vec3s::splat(Vec3::ZERO);
         // Lanes whose light is sampled one lane at a time (in one place at the end, so that
         // the scalar sample is inlined once).
         let mut scalar = 0u32;
@@ -535,6 +546,19 @@ impl Scene {
                     radiance.set_lane(k, r);
                     continue;
                 }
+                LaneLight::Point(position, intensity, spot) => {
+                    points |= 1 << k;
+                    spots |= u32::from(spot) << k;
+                    light_p.set_lane(k, position);
+                    radiance.set_lane(k, intensity);
+                    continue;
+                }
+                LaneLight::Directional(towards, irradiance) => {
+                    directional |= 1 << k;
+                    light_p.set_lane(k, towards);
+                    radiance.set_lane(k, irradiance);
+                    continue;
+                }
                 _ => {}
             }
             scalar |= 1 << k;
@@ -551,6 +575,10 @@ impl Scene {
             out.p_error = Vec3s::select(m, zero, out.p_error);
             out.pdf = m.select(f32x16::splat(warp::uniform_sphere_pdf()) * pmf, out.pdf);
             out.radiance = Vec3s::select(m, radiance, out.radiance);
+        }
+        if points | directional != 0 {
+            let lanes = (points, spots, directional);
+            self.delta_light_samples(lanes, &chosen, p, light_p, radiance, pmf, out);
         }
         if let Some(Emitter::Envmap(map)) = envmap.map(|e| &self.emitters[e as usize]) {
             map.sample_directions(mapped, u, pmf, out);
@@ -587,6 +615,62 @@ impl Scene {
             let es = self.sample_light_prim(prim, prim_pmf, p.lane(k), u.lane(k));
             out.set(k, es.as_ref());
         }
+    }
+
+    /// The samples of the delta lights chosen by [`Scene::sample_emitter_directions`], bit
+    /// for bit `PointLight::sample_direction`, `SpotLight::sample_direction` and
+    /// `DirectionalLight::sample_direction` (density 1, times the choice's `pmf`): lanes
+    /// `points` from the points `p` towards the lights at `light_p` of intensities
+    /// `radiance` (`spots` of them spot lights, whose falloff is found lane by lane from the
+    /// emitter `chosen`), lanes `directional` towards the directions `light_p` with
+    /// irradiances `radiance`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn delta_light_samples(
+        &self,
+        (points, spots, directional): (u32, u32, u32),
+        chosen: &[(LightPrim, f32); LIGHT_LANES],
+        p: Vec3s,
+        light_p: Vec3s,
+        mut radiance: Vec3s,
+        pmf: f32x16,
+        out: &mut EmitterSampleLanes,
+    ) {
+        let delta = light_p - p;
+        let dist2 = delta.length_squared();
+        let dist = dist2.sqrt();
+        let d = delta.div(dist);
+        // A point light's radiance; a spot light's is found below.
+        radiance = Vec3s::select(mask(points & !spots), radiance.div(dist2), radiance);
+        // No sample at the light's own position (or from a NaN point).
+        let mut valid = points & dist2.simd_gt(f32x16::ZERO).to_bitmask();
+        for k in lanes_of(valid & spots) {
+            let Emitter::Spot(spot) = &self.emitters[chosen[k].0.emitter as usize] else {
+                unreachable!("a spot lane chose a spot light");
+            };
+            let falloff = spot.falloff_towards(d.lane(k));
+            if falloff > 0.0 {
+                radiance.set_lane(k, spot.intensity * (falloff / dist2.lane(k)));
+            } else {
+                valid &= !(1 << k);
+            }
+        }
+        valid |= directional;
+        let m = mask(valid);
+        let at_infinity = mask(directional);
+        let zero = Vec3s::splat(Vec3::ZERO);
+        out.valid |= valid;
+        out.delta |= valid;
+        out.d = Vec3s::select(m, Vec3s::select(at_infinity, light_p, d), out.d);
+        out.dist = m.select(
+            at_infinity.select(f32x16::splat(f32::INFINITY), dist),
+            out.dist,
+        );
+        out.p = Vec3s::select(m, Vec3s::select(at_infinity, zero, light_p), out.p);
+        out.n = Vec3s::select(m, zero, out.n);
+        out.p_error = Vec3s::select(m, zero, out.p_error);
+        out.pdf = m.select(pmf, out.pdf);
+        out.radiance = Vec3s::select(m, radiance, out.radiance);
     }
 
     /// Density with which [`Scene::sample_emitter_direction`] from `ctx` produces the

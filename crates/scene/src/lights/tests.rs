@@ -1503,8 +1503,8 @@ fn sampling_weight_multiplies_a_bvh_leafs_odds() {
 /// light triangle, flat or smooth (solid-angle sampling in f64 lanes), far from it (area
 /// sampling in lanes), behind it (no sample), from outside spheres (cone sampling in lanes)
 /// and inside them (the scalar code), among lights of other kinds (disk: the scalar code;
-/// a constant environment or an environment map: in lanes), and with lanes left out of the
-/// batch.
+/// a constant environment or an environment map: in lanes; point, spot and directional
+/// lights: in lanes, a spot's falloff lane by lane), and with lanes left out of the batch.
 #[test]
 fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
     use crate::lights::LIGHT_LANES;
@@ -1558,12 +1558,56 @@ fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
             )
         })
     };
-    let (mut in_lanes, mut total) = (0, 0);
+    // Delta lights (in lanes): a point light at the origin (from which some queries start:
+    // no sample there), spot lights of each profile aimed at the origin, a directional light.
+    let spot_at = |from: Vec3| crate::look_at(from, Vec3::ZERO, Vec3::Z).unwrap();
+    let deltas = vec![
+        EmitterDesc::Point {
+            position: Vec3::ZERO,
+            intensity: Vec3::new(1.0, 2.0, 3.0),
+        },
+        EmitterDesc::Spot {
+            to_world: spot_at(Vec3::new(0.0, 3.0, 0.5)),
+            intensity: Vec3::splat(5.0),
+            cutoff_angle: 40.0,
+            beam_width: 20.0,
+            falloff_exponent: None,
+        },
+        EmitterDesc::Spot {
+            to_world: spot_at(Vec3::new(1.0, -2.0, 0.0)),
+            intensity: Vec3::splat(7.0),
+            cutoff_angle: 60.0,
+            beam_width: 0.0,
+            falloff_exponent: Some(3.0),
+        },
+        EmitterDesc::SmoothSpot {
+            to_world: spot_at(Vec3::new(-2.0, 0.5, 1.0)),
+            intensity: Vec3::splat(3.0),
+            inner_cone_angle: 15.0,
+            outer_cone_angle: 45.0,
+        },
+        EmitterDesc::Directional {
+            direction: Vec3::new(0.3, -1.0, 0.2),
+            irradiance: Vec3::splat(2.0),
+        },
+    ];
+    let (mut in_lanes, mut delta, mut total) = (0, 0, 0);
     for kind in [LightSamplerKind::Bvh, LightSamplerKind::Uniform] {
-        for env in [vec![], vec![constant.clone()], vec![map.clone()]] {
+        for env in [
+            vec![],
+            vec![constant.clone()],
+            vec![map.clone()],
+            deltas.clone(),
+        ] {
             let s = scene(shapes.clone(), env, kind);
             for _ in 0..400 {
                 let ctx: [LightContext; LIGHT_LANES] = std::array::from_fn(|_| {
+                    if rng.random_range(0..16) == 0 {
+                        return LightContext {
+                            p: Vec3::ZERO,
+                            n: Vec3::Y,
+                        };
+                    }
                     // Distances from 10⁻³ to 10² of the rectangle, on both sides.
                     let r = 10f32.powf(rng.random_range(-3.0..2.0));
                     let d = warp::square_to_uniform_sphere(Vec2::new(rng.random(), rng.random()));
@@ -1608,6 +1652,7 @@ fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
                         ctx[k].p
                     );
                     in_lanes += usize::from(want.is_some() && !want.unwrap().is_delta);
+                    delta += usize::from(want.is_some_and(|e| e.is_delta));
                 }
             }
         }
@@ -1617,6 +1662,10 @@ fn light_samples_in_lanes_are_the_scalar_ones_bit_for_bit() {
     assert!(
         in_lanes > total / 4,
         "{in_lanes} samples of {total} queries"
+    );
+    assert!(
+        delta > total / 40,
+        "{delta} delta samples of {total} queries"
     );
 }
 
