@@ -232,6 +232,32 @@ impl PathIntegrator {
         if self.estimates(bsdf) {
             // Shadow rays may cross null surfaces, each a bounce (see the module docs).
             let crossings = self.max_depth.saturating_sub(depth + 2);
+            // The split lights (delta lights sampled at every vertex), each estimate
+            // completed here, before the chosen light's.
+            for i in 0..scene.lights.split().len() {
+                let made = scene.sample_split_light(i, si.p);
+                let mut split = None;
+                let found = self.estimate(
+                    si,
+                    &sp,
+                    bsdf,
+                    crossings,
+                    made.as_ref(),
+                    path.beta,
+                    &mut split,
+                );
+                match (found, &split) {
+                    (Some(()), Some(split)) => {
+                        stats.rays += 1;
+                        let transmittance = scene.transmittance(&split.ends.ray(), crossings);
+                        split.resolve(path, transmittance);
+                    }
+                    _ => path.result += path.beta * Spectrum::ZERO,
+                }
+            }
+        }
+        if self.estimates(bsdf) && scene.lights.chooses() {
+            let crossings = self.max_depth.saturating_sub(depth + 2);
             let (u_sel, u) = self.light_values(scene, depth, sampler);
             let ctx = LightContext {
                 p: si.p,

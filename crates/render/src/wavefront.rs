@@ -411,6 +411,25 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
                 u_sel = v[LIGHT_CHOICE as usize];
             }
         }
+        // The split lights (delta lights sampled at every vertex), each estimate completed
+        // here, before the chosen light's (as `PathIntegrator::bounce`).
+        for i in 0..scene.lights.split().len() {
+            if asks == 0 {
+                break;
+            }
+            let mut samples = EmitterSampleLanes::new();
+            scene.sample_split_lights(i, asks, its.p, &mut samples);
+            let mut split = Shadows::new();
+            estimates(
+                scene, &its, &sp, &bsdf_of, asks, &samples, integrator, &mut paths, &mut split,
+            );
+            stats.rays += u64::from(split.lanes.count_ones());
+            paths.count_rays(split.lanes);
+            resolve_shadows(scene, &split, &mut shadow_rays, &mut paths);
+        }
+        if !scene.lights.chooses() {
+            asks = 0;
+        }
         if asks != 0 {
             let mut samples = EmitterSampleLanes::new();
             scene.sample_emitter_directions(asks, its.p, its.frame.n, u_sel, u, &mut samples);
@@ -466,26 +485,7 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         }
 
         // ---- Shadow rays, made and traced all lanes at once ----
-        if shadows.lanes != 0 {
-            shadows.ends.write(&mut shadow_rays);
-            let blocked = scene.occluded_packet(&shadow_rays);
-            let mut transmittance = f32x16::ONE;
-            for k in lanes_of(blocked & shadows.lanes) {
-                let t = scene.transmittance_of_blocked(&shadow_rays.ray(k), shadows.crossings[k]);
-                transmittance.set_lane(k, t);
-            }
-            // `PendingShadow::resolve`.
-            let estimate = Vector3::select(
-                transmittance.equals(f32x16::ZERO),
-                Vector3::zero(),
-                shadows.f_radiance * (shadows.w * transmittance / shadows.pdf),
-            );
-            paths.result = Vector3::select(
-                mask(shadows.lanes),
-                paths.result + shadows.beta * estimate,
-                paths.result,
-            );
-        }
+        resolve_shadows(scene, &shadows, &mut shadow_rays, &mut paths);
 
         // ---- Finished paths give up their lanes ----
         for k in lanes_of(ends & live) {
@@ -497,6 +497,37 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         }
         paths.live &= !ends;
     }
+}
+
+/// Traces the shadow rays of `shadows` as one packet (made in `rays`) and adds their
+/// estimates to their paths (`PendingShadow::resolve` in lanes).
+#[inline(always)]
+fn resolve_shadows<S: Sampler>(
+    scene: &Scene,
+    shadows: &Shadows,
+    rays: &mut RayPacket,
+    paths: &mut Paths<'_, S>,
+) {
+    if shadows.lanes == 0 {
+        return;
+    }
+    shadows.ends.write(rays);
+    let blocked = scene.occluded_packet(rays);
+    let mut transmittance = f32x16::ONE;
+    for k in lanes_of(blocked & shadows.lanes) {
+        let t = scene.transmittance_of_blocked(&rays.ray(k), shadows.crossings[k]);
+        transmittance.set_lane(k, t);
+    }
+    let estimate = Vector3::select(
+        transmittance.equals(f32x16::ZERO),
+        Vector3::zero(),
+        shadows.f_radiance * (shadows.w * transmittance / shadows.pdf),
+    );
+    paths.result = Vector3::select(
+        mask(shadows.lanes),
+        paths.result + shadows.beta * estimate,
+        paths.result,
+    );
 }
 
 /// Fresh lanes from which the film values are made all at once

@@ -5,7 +5,7 @@
 //! order. (One pass of 16 samples with a box filter, so that both sum each pixel's samples in
 //! the same order.)
 
-use glam::{UVec2, Vec2};
+use glam::{UVec2, Vec2, Vec3};
 use radia_formats::{load_scene, SceneOptions};
 use radia_render::film::Filter;
 use radia_render::path::{layout, PathIntegrator, PathStats};
@@ -83,6 +83,14 @@ fn packets_of_paths_render_what_one_path_at_a_time_renders() {
             d.integrator.max_depth = max_depth;
             variants.push(("bvh", Scene::build(d)));
         }
+        // And with a point light beside the scene's lights (sampled at every vertex besides
+        // the light chosen among them, each with its own shadow ray: `split_lights`).
+        let mut d = desc.clone();
+        d.emitters.push(radia_scene::EmitterDesc::Point {
+            position: d.camera.to_world.transform_point3(Vec3::new(0.3, 0.5, 0.0)),
+            intensity: Vec3::splat(2.0),
+        });
+        variants.push(("bvh + point", Scene::build(d)));
         // And with Mitsuba's uniform choice of light (whose probabilities, of the environment
         // too, the packet loop reads in lanes).
         let mut uniform = Scene::build(desc.clone());
@@ -111,5 +119,5 @@ fn packets_of_paths_render_what_one_path_at_a_time_renders() {
             compared += 1;
         }
     }
-    assert!(compared >= 190, "{compared} renders compared");
+    assert!(compared >= 230, "{compared} renders compared");
 }

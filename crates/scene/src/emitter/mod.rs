@@ -220,6 +220,14 @@ impl Emitter {
         )
     }
 
+    /// Point, spot and directional lights: of no extent, so found by light sampling only.
+    pub fn is_delta(&self) -> bool {
+        matches!(
+            self,
+            Emitter::Point(_) | Emitter::Spot(_) | Emitter::Directional(_)
+        )
+    }
+
     /// Number of light primitives: the triangles of an emitting mesh, else 1.
     pub fn primitive_count(&self, shapes: &[Shape]) -> u32 {
         match self {

@@ -1006,17 +1006,104 @@ fn uniform_and_power_tables() {
 #[test]
 fn one_light_needs_no_selection() {
     let s = scene(
+        vec![emitting(sphere(Vec3::Y, 0.5, false), Vec3::ONE)],
         vec![],
-        vec![EmitterDesc::Point {
-            position: Vec3::Y,
-            intensity: Vec3::ONE,
-        }],
         LightSamplerKind::Bvh,
     );
     let ctx = contexts()[0];
     assert_eq!(s.lights.sample(&ctx, 0.7), Some((0, 1.0)));
     let s = scene(vec![], vec![], LightSamplerKind::Bvh);
     assert!(s.lights.is_empty());
+}
+
+fn point_light(position: Vec3) -> EmitterDesc {
+    EmitterDesc::Point {
+        position,
+        intensity: Vec3::ONE,
+    }
+}
+
+#[test]
+fn few_delta_lights_are_split_under_radia_strategies() {
+    // An area light with a point, a spot and a directional light: radia's strategies sample
+    // the three delta lights at every vertex (density 1 each) and choose among the rest;
+    // Mitsuba's uniform choice takes each emitter as one of four.
+    let delta = vec![
+        point_light(Vec3::new(1.0, 2.0, 0.0)),
+        EmitterDesc::Spot {
+            to_world: crate::look_at(Vec3::new(0.0, 3.0, 0.0), Vec3::ZERO, Vec3::Z).unwrap(),
+            intensity: Vec3::splat(8.0),
+            cutoff_angle: 30.0,
+            beam_width: 20.0,
+            falloff_exponent: None,
+        },
+        EmitterDesc::Directional {
+            direction: Vec3::new(0.0, -1.0, 0.5),
+            irradiance: Vec3::splat(2.0),
+        },
+    ];
+    let shapes = vec![emitting(
+        sphere(Vec3::new(-1.0, 1.0, 0.0), 0.3, false),
+        Vec3::ONE,
+    )];
+    let ctx = LightContext {
+        p: Vec3::new(0.2, 0.0, 0.1),
+        n: Vec3::Y,
+    };
+    for kind in [LightSamplerKind::Bvh, LightSamplerKind::Power] {
+        let s = scene(shapes.clone(), delta.clone(), kind);
+        let split = s.lights.split().to_vec();
+        let deltas: Vec<u32> = (0..s.emitters.len() as u32)
+            .filter(|&e| s.emitters[e as usize].is_delta())
+            .collect();
+        assert_eq!((split.len(), &split), (3, &deltas), "{kind}");
+        for (i, &e) in split.iter().enumerate() {
+            // The emitter's own sample, at density 1.
+            let want = s.emitters[e as usize].sample_direction(&s.shapes, ctx.p, 0, Vec2::ZERO);
+            let got = s.sample_split_light(i, ctx.p);
+            assert_eq!(
+                got.map(|g| (g.d, g.radiance, g.pdf)),
+                want.map(|w| (w.d, w.radiance, 1.0))
+            );
+            assert!(got.is_some(), "{kind}: light {e} lights the point");
+            assert_eq!(s.lights.pmf(&ctx, s.lights.prim_index(e, 0)), 0.0, "{kind}");
+        }
+        // The area light is the one left to choose.
+        assert!(s.lights.chooses() && !s.lights.is_empty());
+        for k in 0..100 {
+            let (i, pmf) = s.lights.sample(&ctx, (k as f32 + 0.5) / 100.0).unwrap();
+            assert!(
+                !s.emitters[s.lights.prim(i).emitter as usize].is_delta(),
+                "{kind}"
+            );
+            assert_eq!(pmf, 1.0, "{kind}");
+        }
+        // Delta lights alone: nothing to choose, but something to sample.
+        let alone = scene(vec![], delta.clone(), kind);
+        assert_eq!(alone.lights.split().len(), 3);
+        assert!(!alone.lights.chooses() && !alone.lights.is_empty());
+    }
+    let s = scene(shapes.clone(), delta.clone(), LightSamplerKind::Uniform);
+    assert!(s.lights.split().is_empty());
+    for e in 0..4 {
+        assert_eq!(s.lights.pmf(&ctx, s.lights.prim_index(e, 0)), 0.25);
+    }
+    // More delta lights than `SPLIT_DELTA_LIGHTS_MAX`: chosen among, as before.
+    let many: Vec<EmitterDesc> = (0..=crate::lights::SPLIT_DELTA_LIGHTS_MAX)
+        .map(|i| point_light(Vec3::new(i as f32, 2.0, 0.0)))
+        .collect();
+    let s = scene(vec![], many, LightSamplerKind::Bvh);
+    assert!(s.lights.split().is_empty() && s.lights.chooses());
+    // A delta light of sampling weight 0 is never sampled (as Mitsuba never chooses it).
+    let mut s = scene(
+        vec![],
+        vec![point_light(Vec3::Y), point_light(Vec3::X)],
+        LightSamplerKind::Bvh,
+    );
+    s.sampling_weights = vec![0.0, 1.0];
+    s.set_light_sampler(LightSamplerKind::Bvh);
+    assert_eq!(s.lights.split(), &[1]);
+    assert!(!s.lights.chooses());
 }
 
 #[test]
@@ -1223,6 +1310,9 @@ fn a_smooth_mesh_light_glows_about_its_vertex_normals_as_in_mitsuba() {
 
 #[test]
 fn point_spot_directional_values() {
+    // Through Mitsuba's choice, which samples a lone delta light as the chosen one (radia's
+    // strategies sample it as a split light, the same sample at density 1:
+    // `few_delta_lights_are_split_under_radia_strategies`).
     let ctx = LightContext {
         p: Vec3::new(0.0, 0.0, 0.0),
         n: Vec3::Y,
@@ -1233,7 +1323,7 @@ fn point_spot_directional_values() {
             position: Vec3::new(0.0, 2.0, 0.0),
             intensity: Vec3::new(4.0, 8.0, 12.0),
         }],
-        LightSamplerKind::Bvh,
+        LightSamplerKind::Uniform,
     );
     let es = s
         .sample_emitter_direction(&ctx, 0.3, Vec2::splat(0.5))
@@ -1254,7 +1344,7 @@ fn point_spot_directional_values() {
                 beam_width: beam,
                 falloff_exponent: exponent,
             }],
-            LightSamplerKind::Bvh,
+            LightSamplerKind::Uniform,
         )
     };
     let at_angle = |s: &Scene, deg: f32| {
@@ -1295,7 +1385,7 @@ fn point_spot_directional_values() {
             direction: Vec3::new(0.0, -2.0, 0.0),
             irradiance: Vec3::splat(3.0),
         }],
-        LightSamplerKind::Bvh,
+        LightSamplerKind::Uniform,
     );
     let es = s.sample_emitter_direction(&ctx, 0.5, Vec2::ZERO).unwrap();
     assert!(es.is_delta && es.dist.is_infinite());
