@@ -75,7 +75,8 @@ enum Command {
         rfilter: Option<FilterDesc>,
         /// How next-event estimation chooses a light: uniform (Mitsuba's choice), power, or
         /// bvh (a light BVH that accounts for distance and orientation; the default). power
-        /// and bvh leave a constant environment to BSDF sampling, as pbrt-v4 does.
+        /// and bvh leave a constant environment to BSDF sampling, as pbrt-v4 does, and
+        /// sample every point, spot and directional light (up to eight) at every vertex.
         #[arg(long, value_name = "uniform|power|bvh")]
         light_sampler: Option<LightSamplerKind>,
         /// Render passes of 16 spp until the next one would end after SECONDS, then write
