@@ -162,10 +162,11 @@ impl PathIntegrator {
     }
 
     /// One step of the path at `hit`, the closest hit of `path.ray` (already traced and
-    /// counted): the emission found there, a next-event estimate (written to `shadow`, which
-    /// must be `None` on entry, for its shadow ray to be traced and
-    /// [`PendingShadow::resolve`]d before the next step), the BSDF sample that gives the next
-    /// ray, and Russian roulette. Returns false when the path ends here.
+    /// counted): the emission found there, the next-event estimates of the split lights
+    /// (`Lights::split`, their shadow rays traced here) and of a light chosen among the
+    /// others (written to `shadow`, which must be `None` on entry, for its shadow ray to be
+    /// traced and [`PendingShadow::resolve`]d before the next step), the BSDF sample that
+    /// gives the next ray, and Russian roulette. Returns false when the path ends here.
     ///
     /// The packet loop (`crate::wavefront`) runs these steps over its lanes, and this
     /// function for the lanes it does not cover.
@@ -256,6 +257,7 @@ impl PathIntegrator {
                 }
             }
         }
+        // The chosen light's.
         if self.estimates(bsdf) && scene.lights.chooses() {
             let crossings = self.max_depth.saturating_sub(depth + 2);
             let (u_sel, u) = self.light_values(scene, depth, sampler);

@@ -566,9 +566,10 @@ impl Scene {
     /// position values `u`: lane k of `out` becomes, bit for bit, what it returns for lane
     /// k's values (other lanes are left as they are). The light is chosen lane by lane; area
     /// lights of constant radiance on flat triangles that are small seen from their lane and
-    /// on spheres seen from outside, constant environments and environment maps are then
-    /// sampled in lanes ([`crate::shape::LightTriangles`], [`crate::shape::LightSpheres`],
-    /// [`crate::emitter::Envmap::sample_directions`]), every other light one lane at a time.
+    /// on spheres seen from outside, constant environments, environment maps and point, spot
+    /// and directional lights are then sampled in lanes ([`crate::shape::LightTriangles`],
+    /// [`crate::shape::LightSpheres`], [`crate::emitter::Envmap::sample_directions`], a
+    /// spot's falloff lane by lane), every other light one lane at a time.
     pub fn sample_emitter_directions(
         &self,
         active: u32,
