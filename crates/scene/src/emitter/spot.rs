@@ -125,8 +125,9 @@ impl SpotLight {
         }
     }
 
-    /// The falloff seen from a point in direction `d` (unit, world space) from the light:
-    /// [`Self::falloff`] of the light's local direction `-d`.
+    /// The falloff towards a point that sees the light in direction `d` (unit, world space):
+    /// [`Self::falloff`] of `-d`, the direction from the light to the point, in the light's
+    /// frame.
     #[inline]
     pub fn falloff_towards(&self, d: Vec3) -> f32 {
         self.falloff(self.to_local * -d)
