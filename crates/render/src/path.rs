@@ -256,24 +256,25 @@ impl PathIntegrator {
                     _ => path.result += path.beta * Spectrum::ZERO,
                 }
             }
-        }
-        // The chosen light's.
-        if self.estimates(bsdf) && scene.lights.chooses() {
-            let crossings = self.max_depth.saturating_sub(depth + 2);
-            let (u_sel, u) = self.light_values(scene, depth, sampler);
-            let ctx = LightContext {
-                p: si.p,
-                n: si.frame.n,
-            };
-            // Read in place: moving the record out of the Option just after the callee wrote
-            // it field by field stalls on store forwarding (measured: 6% of the packet loop).
-            let made = scene.sample_emitter_direction(&ctx, u_sel, u);
-            let found = self.estimate(si, &sp, bsdf, crossings, made.as_ref(), path.beta, shadow);
-            match found {
-                Some(()) => stats.rays += 1,
-                // Nothing to trace: the estimate is 0, added as the full estimate would be
-                // (β · 0 is not 0 for a β that is not finite).
-                None => path.result += path.beta * Spectrum::ZERO,
+            // The light chosen among the others.
+            if scene.lights.chooses() {
+                let (u_sel, u) = self.light_values(scene, depth, sampler);
+                let ctx = LightContext {
+                    p: si.p,
+                    n: si.frame.n,
+                };
+                // Read in place: moving the record out of the Option just after the callee
+                // wrote it field by field stalls on store forwarding (measured: 6% of the
+                // packet loop).
+                let made = scene.sample_emitter_direction(&ctx, u_sel, u);
+                let found =
+                    self.estimate(si, &sp, bsdf, crossings, made.as_ref(), path.beta, shadow);
+                match found {
+                    Some(()) => stats.rays += 1,
+                    // Nothing to trace: the estimate is 0, added as the full estimate would
+                    // be (β · 0 is not 0 for a β that is not finite).
+                    None => path.result += path.beta * Spectrum::ZERO,
+                }
             }
         }
 

@@ -413,10 +413,12 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
         }
         // The split lights (delta lights sampled at every vertex), each estimate completed
         // here, before the chosen light's (as `PathIntegrator::bounce`).
-        for i in 0..scene.lights.split().len() {
-            if asks == 0 {
-                break;
-            }
+        let split_lights = if asks != 0 {
+            scene.lights.split().len()
+        } else {
+            0
+        };
+        for i in 0..split_lights {
             let mut samples = EmitterSampleLanes::new();
             scene.sample_split_lights(i, asks, its.p, &mut samples);
             let mut split = Shadows::new();
@@ -427,10 +429,8 @@ pub(crate) fn li_many<'a, S: Sampler + 'a>(
             paths.count_rays(split.lanes);
             resolve_shadows(scene, &split, &mut shadow_rays, &mut paths);
         }
-        if !scene.lights.chooses() {
-            asks = 0;
-        }
-        if asks != 0 {
+        // The light chosen among the others.
+        if asks != 0 && scene.lights.chooses() {
             let mut samples = EmitterSampleLanes::new();
             scene.sample_emitter_directions(asks, its.p, its.frame.n, u_sel, u, &mut samples);
             estimates(
